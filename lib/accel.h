@@ -1,0 +1,48 @@
+// RayAccel: one Embree BVH over the scene's triangles, behind RAII. Embree errors become
+// Error(Embree). Rays are in world space; hits come back as SurfacePoints.
+#pragma once
+
+#include <memory>
+
+#include "scene.h"
+
+namespace rs {
+
+struct SurfacePoint {
+    Vec3 p;          // world position
+    Vec3 ng;         // geometric normal of the winding (front side), unit
+    Vec3 ns;         // interpolated shading normal, unit
+    Vec2 uv;
+    uint32_t tri = 0;
+    uint32_t material = 0;
+    bool frontFace = true;  // the ray came from the side ng points to
+};
+
+class RayAccel {
+public:
+    RayAccel(const Scene& scene, int threads);
+    ~RayAccel();
+    RayAccel(const RayAccel&) = delete;
+    RayAccel& operator=(const RayAccel&) = delete;
+
+    // Closest hit along o + t·d, t in (0, tmax); d need not be unit.
+    bool intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint& hit, float& t) const;
+    // Anything in (0, tmax)?
+    bool occluded(const Vec3& o, const Vec3& d, float tmax) const;
+    const Scene& scene() const { return scene_; }
+
+    struct Impl;  // Embree handles
+
+private:
+    std::unique_ptr<Impl> impl_;
+    const Scene& scene_;
+};
+
+// A ray origin nudged off the surface to the side `w` leaves by.
+inline Vec3 offsetRayOrigin(const SurfacePoint& sp, const Vec3& w) {
+    float scale = 1.f + std::max(std::abs(sp.p.x), std::max(std::abs(sp.p.y), std::abs(sp.p.z)));
+    float eps = 1e-4f * scale;
+    return sp.p + (glm::dot(w, sp.ng) > 0.f ? eps : -eps) * sp.ng;
+}
+
+}  // namespace rs

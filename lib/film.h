@@ -1,0 +1,56 @@
+// Film: the image being rendered, kept as separate light-transport layers (DESIGN §9, §10)
+// whose sum is the beauty image, plus first-hit albedo and normal for denoisers.
+// Raster space: pixel (x, y) covers [x, x+1) × [y, y+1), y down, centre at +0.5.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "math.h"
+
+namespace rs {
+
+enum Layer { kDirect = 0, kIndirect, kCaustic, kEmission, kLayerCount };
+const char* layerName(int layer);
+
+struct Film {
+    int width = 0, height = 0;
+    std::vector<Vec3> layers[kLayerCount];
+    std::vector<Vec3> albedo, normal;
+
+    Film() = default;
+    Film(int w, int h);
+    size_t pixelCount() const { return size_t(width) * height; }
+    Vec3 beauty(size_t i) const;
+    std::vector<Vec3> beautyImage() const;
+    void add(const Film& other);  // pixelwise sum of every buffer
+    void scale(float s);
+};
+
+// Header attributes of the EXR (string values), e.g. method, spp, seed, timings.
+using ImageAttributes = std::map<std::string, std::string>;
+
+// Writes beauty R,G,B plus <layer>.R/G/B, albedo.*, normal.* as float channels, to a temporary
+// name beside `path` and renamed into place: a failed write leaves nothing behind.
+void writeExr(const std::string& path, const Film& film, const ImageAttributes& attributes);
+// Tone-mapped preview: exposure in stops, clamp, sRGB transfer, 8-bit RGB PNG; atomic too.
+void writePng(const std::string& path, const Film& film, float exposureStops);
+
+// An EXR read back: channel name → values (row-major), and the string attributes.
+struct ExrImage {
+    int width = 0, height = 0;
+    std::map<std::string, std::vector<float>> channels;
+    ImageAttributes attributes;
+    std::vector<Vec3> rgb(const std::string& prefix = "") const;  // "" or "direct." …
+};
+ExrImage readExr(const std::string& path);
+
+// Writes `contents` atomically (temporary file + rename); throws Error(Io).
+void writeFileAtomic(const std::string& path, const std::string& contents);
+// The temporary name used for an atomic write of `path`, in the same directory.
+std::string temporaryPathFor(const std::string& path);
+// Renames tmp to path; on failure removes tmp and throws Error(Io) naming path.
+void commitTemporary(const std::string& tmp, const std::string& path);
+
+}  // namespace rs

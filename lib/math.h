@@ -1,0 +1,60 @@
+// Small math vocabulary on top of GLM: vectors, bounds, orthonormal frames.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#define GLM_FORCE_XYZW_ONLY
+#include <glm/glm.hpp>
+
+namespace rs {
+
+using Vec2 = glm::vec2;
+using Vec3 = glm::vec3;
+using Vec4 = glm::vec4;
+using Mat4 = glm::mat4;
+using DVec3 = glm::dvec3;
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kInvPi = 1.0f / kPi;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+inline float luminance(const Vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+inline float maxComponent(const Vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
+inline bool isBlack(const Vec3& c) { return c.x <= 0.f && c.y <= 0.f && c.z <= 0.f; }
+inline bool isFinite(const Vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+inline float sqr(float x) { return x * x; }
+
+struct Bounds3 {
+    Vec3 lo{kInf};
+    Vec3 hi{-kInf};
+
+    void extend(const Vec3& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+    void extend(const Bounds3& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+    bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+    Vec3 extent() const { return empty() ? Vec3(0.f) : hi - lo; }
+    Vec3 center() const { return 0.5f * (lo + hi); }
+    float diagonal() const { return glm::length(extent()); }
+};
+
+// Right-handed orthonormal frame around a unit normal (Duff et al.'s branchless basis).
+struct Frame {
+    Vec3 s, t, n;
+
+    Frame() : s(1, 0, 0), t(0, 1, 0), n(0, 0, 1) {}
+    explicit Frame(const Vec3& normal) : n(normal) {
+        float sign = std::copysign(1.0f, n.z);
+        float a = -1.0f / (sign + n.z);
+        float b = n.x * n.y * a;
+        s = Vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        t = Vec3(b, sign + n.y * n.y * a, -n.y);
+    }
+    Vec3 toLocal(const Vec3& v) const { return {glm::dot(v, s), glm::dot(v, t), glm::dot(v, n)}; }
+    Vec3 toWorld(const Vec3& v) const { return v.x * s + v.y * t + v.z * n; }
+};
+
+}  // namespace rs

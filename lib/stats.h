@@ -1,0 +1,33 @@
+// Per-stage wall times and counts of a render, for --stats-json and the EXR header.
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace rs {
+
+struct Stats {
+    std::vector<std::pair<std::string, double>> seconds;  // stage → wall time, in order
+    std::vector<std::pair<std::string, double>> counts;   // name → value, in order
+
+    void addTime(const std::string& stage, double s);
+    void setCount(const std::string& name, double value);
+    double time(const std::string& stage) const;  // 0 when absent
+    double totalSeconds() const;
+    std::string json() const;
+};
+
+class Timer {
+public:
+    Timer() : start_(std::chrono::steady_clock::now()) {}
+    double seconds() const {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    }
+
+private:
+    std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace rs

@@ -1,0 +1,456 @@
+#!/usr/bin/env python3
+"""Generate the raysplat test scenes (glTF 2.0) into OUTDIR.
+
+  cornell_box.gltf + .bin  Cornell box, ceiling area light; external .bin
+                           buffer (the renderer's default scene)
+  glossy_box.glb           same room with a glass sphere and a glossy gold
+                           icosahedron; single binary GLB file
+  direct_light.gltf        ground plane, three occluders, one point light;
+                           buffer embedded as a base64 data URI
+
+Usage:  python3 scripts/make_scenes.py [outdir]
+
+OUTDIR defaults to data/ in the repository root, resolved from this script's
+location (the working directory does not matter). Stdlib only. The output is
+deterministic -- same bytes on every run (fixed object order, sorted JSON
+keys, no timestamps) -- so regenerating gives no spurious diffs.
+
+Conventions (design doc): metres, right-handed, +Y up; counter-clockwise
+winding is the front face; wall normals point into the room; emitters emit
+from their front face only; cameras look down their node's local -Z.
+"""
+
+import base64
+import json
+import math
+import os
+import re
+import struct
+import sys
+
+GENERATOR = "raysplat make_scenes.py"
+FLOAT, UNSIGNED_SHORT, UNSIGNED_INT = 5126, 5123, 5125
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+TRIANGLES = 4
+
+# --------------------------------------------------------------------------
+# Small vector / quaternion helpers (tuples of floats)
+
+
+def add(a, b):
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def mul(a, s):
+    return tuple(x * s for x in a)
+
+
+def dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0])
+
+
+def normalize(a):
+    return mul(a, 1.0 / math.sqrt(dot(a, a)))
+
+
+def f32(x):
+    """Shortest decimal that rounds to the same float32 as x (tidy JSON)."""
+    want = struct.pack("<f", x)
+    for digits in range(6, 10):
+        y = float("%.*g" % (digits, struct.unpack("<f", want)[0]))
+        if struct.pack("<f", y) == want:
+            return y + 0.0  # turns -0.0 into 0.0
+    return struct.unpack("<f", want)[0]
+
+
+def vec(v):
+    return [f32(x) for x in v]
+
+
+def quat_axis_angle(axis, angle):
+    s = math.sin(angle / 2.0)
+    return tuple(c * s for c in normalize(axis)) + (math.cos(angle / 2.0),)
+
+
+def quat_between(a, b):
+    """Rotation taking unit vector a onto unit vector b (not antiparallel)."""
+    angle = math.acos(max(-1.0, min(1.0, dot(a, b))))
+    return quat_axis_angle(cross(a, b), angle)
+
+
+def quat_mul(a, b):
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz)
+
+
+def look_at(eye, target):
+    """Node rotation pointing a glTF camera (looks down -Z, +Y up) from eye
+    at target without roll: yaw about +Y applied after pitch about +X."""
+    dx, dy, dz = sub(target, eye)
+    yaw = math.atan2(-dx, -dz)
+    pitch = math.atan2(dy, math.hypot(dx, dz))
+    return quat_mul(quat_axis_angle((0.0, 1.0, 0.0), yaw),
+                    quat_axis_angle((1.0, 0.0, 0.0), pitch))
+
+
+# --------------------------------------------------------------------------
+# Geometry: (positions, normals, indices) triples
+
+
+def rect(center, u, v, normal):
+    """Flat quad center +- u +- v, wound counter-clockwise around normal."""
+    if dot(cross(u, v), normal) < 0:
+        u, v = v, u
+    n = normalize(normal)
+    pos = [sub(sub(center, u), v), sub(add(center, u), v),
+           add(add(center, u), v), add(sub(center, u), v)]
+    return pos, [n] * 4, [0, 1, 2, 0, 2, 3]
+
+
+def merge(*parts):
+    pos, nrm, idx = [], [], []
+    for p, n, i in parts:
+        idx += [len(pos) + k for k in i]
+        pos += p
+        nrm += n
+    return pos, nrm, idx
+
+
+def unit_cube():
+    """Cube [-0.5, 0.5]^3, outward flat normals, 24 vertices."""
+    faces = []
+    for axis in range(3):
+        e = [tuple(float(k == (axis + j) % 3) for k in range(3))
+             for j in range(3)]
+        for sign in (1.0, -1.0):
+            faces.append(rect(mul(e[0], 0.5 * sign), mul(e[1], 0.5),
+                              mul(e[2], 0.5), mul(e[0], sign)))
+    return merge(*faces)
+
+
+def uv_sphere(radius, segments=40, rings=20):
+    """UV sphere with smooth outward normals (seam vertices duplicated)."""
+    pos, nrm, idx = [], [], []
+    for r in range(rings + 1):
+        th = math.pi * r / rings
+        for s in range(segments + 1):
+            ph = 2.0 * math.pi * s / segments
+            n = (math.sin(th) * math.cos(ph), math.cos(th),
+                 -math.sin(th) * math.sin(ph))
+            n = normalize(tuple(0.0 if abs(c) < 1e-12 else c for c in n))
+            nrm.append(n)
+            pos.append(mul(n, radius))
+    row = segments + 1
+    for r in range(rings):
+        for s in range(segments):
+            a, d = r * row + s, r * row + s + 1
+            b, c = a + row, d + row
+            if r != rings - 1:
+                idx += [a, b, c]      # skipped at the south pole (degenerate)
+            if r != 0:
+                idx += [a, c, d]      # skipped at the north pole (degenerate)
+    return pos, nrm, idx
+
+
+def icosahedron():
+    """Unit-circumradius icosahedron, flat shaded (3 vertices per face)."""
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    verts = [normalize(v) for v in [
+        (-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0),
+        (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+        (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11),
+             (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8),
+             (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9),
+             (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    pos, nrm = [], []
+    for f in faces:
+        a, b, c = (verts[i] for i in f)
+        n = normalize(cross(sub(b, a), sub(c, a)))
+        if dot(n, a) < 0:  # keep counter-clockwise seen from outside
+            b, c, n = c, b, mul(n, -1.0)
+        pos += [a, b, c]
+        nrm += [n] * 3
+    return pos, nrm, list(range(len(pos)))
+
+
+# --------------------------------------------------------------------------
+# glTF document builder
+
+
+class GltfBuilder:
+    """Accumulates one binary buffer plus the glTF objects that refer to it."""
+
+    def __init__(self, scene_name):
+        self.doc = {
+            "asset": {"version": "2.0", "generator": GENERATOR},
+            "scene": 0,
+            "scenes": [{"name": scene_name, "nodes": []}],
+            "nodes": [], "meshes": [], "materials": [], "cameras": [],
+            "accessors": [], "bufferViews": [], "buffers": [],
+        }
+        self.bin = bytearray()
+        self.extensions = set()
+        self.lights = []
+
+    def _append(self, key, obj):
+        self.doc[key].append(obj)
+        return len(self.doc[key]) - 1
+
+    def _view(self, data, target):
+        self.bin += b"\0" * (-len(self.bin) % 4)  # 4-byte aligned views
+        view = {"buffer": 0, "byteOffset": len(self.bin),
+                "byteLength": len(data), "target": target}
+        self.bin += data
+        return self._append("bufferViews", view)
+
+    def _vec3_accessor(self, values, with_bounds):
+        flat = [c + 0.0 for v in values for c in v]
+        data = struct.pack("<%df" % len(flat), *flat)
+        acc = {"bufferView": self._view(data, ARRAY_BUFFER),
+               "componentType": FLOAT, "count": len(values), "type": "VEC3"}
+        if with_bounds:  # bounds of the float32 values actually stored
+            stored = struct.unpack("<%df" % len(flat), data)
+            acc["min"] = [f32(min(stored[k::3])) for k in range(3)]
+            acc["max"] = [f32(max(stored[k::3])) for k in range(3)]
+        return self._append("accessors", acc)
+
+    def _index_accessor(self, indices, vertex_count):
+        comp, fmt = ((UNSIGNED_SHORT, "H") if vertex_count <= 65535
+                     else (UNSIGNED_INT, "I"))
+        data = struct.pack("<%d%s" % (len(indices), fmt), *indices)
+        acc = {"bufferView": self._view(data, ELEMENT_ARRAY_BUFFER),
+               "componentType": comp, "count": len(indices), "type": "SCALAR"}
+        return self._append("accessors", acc)
+
+    def material(self, name, base, metallic=0.0, roughness=1.0, emissive=None,
+                 strength=None, transmission=None, ior=None):
+        mat = {"name": name, "pbrMetallicRoughness": {
+            "baseColorFactor": vec(tuple(base) + (1.0,)),
+            "metallicFactor": f32(metallic),
+            "roughnessFactor": f32(roughness)}}
+        ext = {}
+        if emissive is not None:
+            mat["emissiveFactor"] = vec(emissive)
+            if strength is not None:
+                ext["KHR_materials_emissive_strength"] = {
+                    "emissiveStrength": f32(strength)}
+        if transmission is not None:
+            ext["KHR_materials_transmission"] = {
+                "transmissionFactor": f32(transmission)}
+        if ior is not None:
+            ext["KHR_materials_ior"] = {"ior": f32(ior)}
+        if ext:
+            mat["extensions"] = ext
+            self.extensions.update(ext)
+        return self._append("materials", mat)
+
+    def mesh(self, name, geom, material):
+        pos, nrm, idx = geom
+        prim = {"attributes": {"POSITION": self._vec3_accessor(pos, True),
+                               "NORMAL": self._vec3_accessor(nrm, False)},
+                "indices": self._index_accessor(idx, len(pos)),
+                "material": material, "mode": TRIANGLES}
+        return self._append("meshes", {"name": name, "primitives": [prim]})
+
+    def node(self, name, parent=None, mesh=None, t=None, r=None, s=None,
+             **fields):
+        node = {"name": name}
+        if mesh is not None:
+            node["mesh"] = mesh
+        if t is not None:
+            node["translation"] = vec(t)
+        if r is not None:
+            node["rotation"] = vec(r)
+        if s is not None:
+            node["scale"] = vec(s)
+        node.update(fields)
+        index = self._append("nodes", node)
+        if parent is None:
+            self.doc["scenes"][0]["nodes"].append(index)
+        else:
+            self.doc["nodes"][parent].setdefault("children", []).append(index)
+        return index
+
+    def camera(self, name, eye, target, yfov, aspect, znear=0.05, zfar=100.0):
+        persp = {"yfov": f32(yfov), "znear": f32(znear), "zfar": f32(zfar),
+                 "aspectRatio": f32(aspect)}
+        cam = self._append("cameras", {"name": name, "type": "perspective",
+                                       "perspective": persp})
+        return self.node(name, camera=cam, t=eye, r=look_at(eye, target))
+
+    def point_light(self, name, position, intensity, color=(1.0, 1.0, 1.0)):
+        self.extensions.add("KHR_lights_punctual")
+        self.lights.append({"name": name, "type": "point",
+                            "color": vec(color), "intensity": f32(intensity)})
+        return self.node(name, t=position, extensions={
+            "KHR_lights_punctual": {"light": len(self.lights) - 1}})
+
+    def _finish(self, uri):
+        self.bin += b"\0" * (-len(self.bin) % 4)
+        doc = dict(self.doc)
+        buf = {"byteLength": len(self.bin)}
+        if uri is not None:
+            buf["uri"] = uri
+        doc["buffers"] = [buf]
+        if self.lights:
+            doc["extensions"] = {
+                "KHR_lights_punctual": {"lights": self.lights}}
+        if self.extensions:
+            doc["extensionsUsed"] = sorted(self.extensions)
+        return {k: v for k, v in doc.items() if v != []}
+
+    def write_gltf(self, path, embed=False):
+        if embed:
+            uri = ("data:application/octet-stream;base64,"
+                   + base64.b64encode(bytes(self.bin)).decode("ascii"))
+        else:
+            uri = os.path.splitext(os.path.basename(path))[0] + ".bin"
+        text = json.dumps(self._finish(uri), indent=1, sort_keys=True)
+        # Put lists of plain numbers / strings on one line.
+        text = re.sub(r"\[\s+([^][{}]*?)\s+\]",
+                      lambda m: "[" + re.sub(r",\s+", ", ", m.group(1)) + "]",
+                      text)
+        with open(path, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text + "\n")
+        if not embed:
+            with open(os.path.join(os.path.dirname(path), uri), "wb") as f:
+                f.write(self.bin)
+
+    def write_glb(self, path):
+        js = json.dumps(self._finish(None), separators=(",", ":"),
+                        sort_keys=True).encode("utf-8")
+        js += b" " * (-len(js) % 4)
+        chunks = (struct.pack("<II", len(js), 0x4E4F534A) + js
+                  + struct.pack("<II", len(self.bin), 0x004E4942) + self.bin)
+        with open(path, "wb") as f:
+            f.write(struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)))
+            f.write(chunks)
+
+
+# --------------------------------------------------------------------------
+# Scenes
+
+WHITE = (0.75, 0.75, 0.75)
+LIGHT_RGB, LIGHT_STRENGTH = (1.0, 0.78, 0.5), 25.0
+X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+
+
+def build_room(g, left_rgb, right_rgb):
+    """2 x 2 x 2 m room (x,z in [-1,1], y in [0,2]) open towards +z, with a
+    0.5 x 0.4 m ceiling light; adds the box camera at (0, 1, 3.4)."""
+    white = g.material("white", WHITE)
+    left = g.material("left_wall", left_rgb)
+    right = g.material("right_wall", right_rgb)
+    light = g.material("light", (0.0, 0.0, 0.0), emissive=LIGHT_RGB,
+                       strength=LIGHT_STRENGTH)
+    walls = [  # name, center, u, v, normal (pointing into the room), material
+        ("floor", (0, 0, 0), X, Z, Y, white),
+        ("ceiling", (0, 2, 0), X, Z, mul(Y, -1), white),
+        ("back_wall", (0, 1, -1), X, Y, Z, white),
+        ("left_wall", (-1, 1, 0), Y, Z, X, left),
+        ("right_wall", (1, 1, 0), Y, Z, mul(X, -1), right),
+        ("light", (0, 1.98, 0), mul(X, 0.25), mul(Z, 0.2), mul(Y, -1), light),
+    ]
+    for name, c, u, v, n, m in walls:
+        g.node(name, mesh=g.mesh(name, rect(c, u, v, n), m))
+    g.camera("camera", eye=(0.0, 1.0, 3.4), target=(0.0, 1.0, 0.0),
+             yfov=0.69, aspect=1.0)
+    return white
+
+
+def cornell_box(outdir):
+    g = GltfBuilder("cornell_box")
+    white = build_room(g, (0.63, 0.065, 0.05), (0.14, 0.45, 0.09))
+    cube = g.mesh("unit_cube", unit_cube(), white)
+    # The parent's translation composes with the children's TRS: world
+    # centres are short box (0.35, 0.3, 0.35), tall box (-0.35, 0.6, -0.3).
+    boxes = g.node("boxes", t=(0.0, 0.0, -0.1))
+    g.node("tall_box", parent=boxes, mesh=cube, t=(-0.35, 0.6, -0.2),
+           r=quat_axis_angle(Y, math.radians(17.0)), s=(0.6, 1.2, 0.6))
+    g.node("short_box", parent=boxes, mesh=cube, t=(0.35, 0.3, 0.45),
+           r=quat_axis_angle(Y, math.radians(-18.0)), s=(0.6, 0.6, 0.6))
+    g.write_gltf(os.path.join(outdir, "cornell_box.gltf"))
+    return g
+
+
+def glossy_box(outdir):
+    g = GltfBuilder("glossy_box")
+    build_room(g, (0.1, 0.2, 0.6), (0.14, 0.45, 0.09))
+    glass = g.material("glass", (1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.5)
+    gold = g.material("gold", (1.0, 0.78, 0.34), metallic=1.0, roughness=0.3)
+    radius = 0.35
+    g.node("glass_sphere", t=(-0.42, radius, 0.3),
+           mesh=g.mesh("glass_sphere", uv_sphere(radius), glass))
+    # Unit icosahedron scaled to radius 0.35 and rotated so that one face
+    # rests flat on the floor (its centre then sits at the inradius).
+    ico = icosahedron()
+    n0 = ico[1][0]
+    inradius = radius * abs(dot(n0, ico[0][0]))
+    g.node("gold_icosahedron", t=(0.4, inradius, -0.35),
+           r=quat_between(n0, (0.0, -1.0, 0.0)), s=(radius, radius, radius),
+           mesh=g.mesh("gold_icosahedron", ico, gold))
+    g.write_glb(os.path.join(outdir, "glossy_box.glb"))
+    return g
+
+
+def direct_light(outdir):
+    g = GltfBuilder("direct_light")
+    ground = g.material("ground", (0.6, 0.6, 0.6))
+    g.node("ground", mesh=g.mesh("ground", rect((0, 0, 0), mul(X, 3.0),
+                                                 mul(Z, 3.0), Y), ground))
+    cube = unit_cube()
+    box = g.mesh("box", cube, g.material("box_white", (0.8, 0.8, 0.78)))
+    slab = g.mesh("slab", cube, g.material("slab_white", (0.7, 0.7, 0.7)))
+    pole = g.mesh("pole", cube, g.material("pole_white", (0.75, 0.74, 0.72)))
+    g.node("box", mesh=box, t=(-1.0, 0.3, 0.6),
+           r=quat_axis_angle(Y, math.radians(30.0)), s=(0.6, 0.6, 0.6))
+    g.node("slab", mesh=slab, t=(1.4, 0.5, -0.6),
+           r=quat_axis_angle(Y, math.radians(-35.0)), s=(1.2, 1.0, 0.05))
+    # A small cap raised on a thin column (hierarchy: parent + 2 children).
+    stand = g.node("raised_block", t=(-0.4, 0.0, -1.2),
+                   r=quat_axis_angle(Y, math.radians(20.0)))
+    g.node("column", parent=stand, mesh=pole, t=(0.0, 0.6, 0.0),
+           s=(0.08, 1.2, 0.08))
+    g.node("cap", parent=stand, mesh=pole, t=(0.0, 1.25, 0.0),
+           s=(0.45, 0.1, 0.45))
+    g.point_light("point_light", position=(0.5, 3.0, 0.5), intensity=40.0)
+    # Looks down 40 degrees (target chosen so atan(4 / 4.77) = 40 deg).
+    g.camera("camera", eye=(0.0, 4.0, 6.0),
+             target=(0.0, 0.0, 6.0 - 4.0 / math.tan(math.radians(40.0))),
+             yfov=0.75, aspect=1.333)
+    g.write_gltf(os.path.join(outdir, "direct_light.gltf"), embed=True)
+    return g
+
+
+def main(argv):
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
+    os.makedirs(outdir, exist_ok=True)
+    for build in (cornell_box, glossy_box, direct_light):
+        g = build(outdir)
+        tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
+                   for n in g.doc["nodes"] if "mesh" in n
+                   for p in g.doc["meshes"][n["mesh"]]["primitives"])
+        print("%-13s %2d nodes, %4d triangles (instanced)" % (
+            g.doc["scenes"][0]["name"], len(g.doc["nodes"]), tris))
+    print("wrote scenes to", outdir)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
