@@ -80,6 +80,8 @@ public:
 
         if (scene_.triangleCount() == 0) fail("the scene has no triangles");
         scene_.computeBounds();
+        // tinygltf's warning only once the load succeeded: a failed load is one error line.
+        if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
         return std::move(scene_);
     }
 
@@ -99,7 +101,7 @@ private:
         bool ok = ext == ".glb" ? gltf.LoadBinaryFromFile(&model_, &err, &warn, path_)
                                 : gltf.LoadASCIIFromFile(&model_, &err, &warn, path_);
         if (!ok) fail("cannot load glTF: " + firstLine(err.empty() ? "unknown error" : err));
-        if (!warn.empty()) reporter_.warn(path_ + ": " + firstLine(warn));
+        if (!warn.empty()) gltfWarning_ = firstLine(warn);
     }
 
     void checkExtensions() {
@@ -445,6 +447,7 @@ private:
     uint32_t defaultMaterial_ = 0;
     std::vector<PunctualLight> lightTemplates_;
     std::map<int, int> textureOfImage_;
+    std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
 };
 
 }  // namespace

@@ -1,0 +1,440 @@
+#!/usr/bin/env python3
+"""cli_test: the raysplat command end to end, through the real binary ($RAYSPLAT).
+
+Bad input (broken scenes, absurd settings, unwritable outputs) must end with exit code 1 --
+never a crash signal -- one stderr line "raysplat: error: ..." naming the file and the glTF
+object, and no output file or temporary left behind (DESIGN §3, §10; STYLE rule 3). Help
+and usage, a good render's three outputs (EXR magic, PNG signature and size, stats JSON),
+and bit-identical pixels with 1 and 2 threads (STYLE rule 6).
+
+Stdlib only. Prints one line per test and closes with "N passed, M failed"; exits 1 on
+any failure.
+"""
+
+import base64
+import json
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+import zlib
+
+RAYSPLAT = os.environ.get("RAYSPLAT", "build/raysplat")
+DATA = os.environ.get("RAYSPLAT_DATA",
+                      os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data"))
+CORNELL = os.path.join(DATA, "cornell_box.gltf")
+GLOSSY = os.path.join(DATA, "glossy_box.glb")
+
+FLOAT, UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT = 5126, 5121, 5123, 5125
+EXR_MAGIC = b"\x76\x2f\x31\x01"  # 0x762f3101, as the file's first four bytes
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+class Failure(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Failure(what)
+
+
+def run(*args, timeout=120):
+    return subprocess.run([RAYSPLAT, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          timeout=timeout, text=True, errors="replace")
+
+
+# -- Writing small glTF files -------------------------------------------------------------
+
+
+def triangle_gltf(positions=((0, 0, 0), (1, 0, 0), (0, 1, 0)), indices=(0, 1, 2),
+                  position_count=None, bin_uri=None):
+    """A one-triangle glTF: returns (document dict, buffer bytes). POSITION is accessor 0,
+    the indices (uint16) accessor 1. position_count overrides the POSITION accessor's count
+    (to read past its bufferView); bin_uri None embeds the buffer as a data URI."""
+    pos = b"".join(struct.pack("<3f", *p) for p in positions)
+    idx = struct.pack("<%dH" % len(indices), *indices)
+    idx += b"\0" * (-len(idx) % 4)
+    buf = pos + idx
+    uri = bin_uri or ("data:application/octet-stream;base64," + base64.b64encode(buf).decode())
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "tri", "mesh": 0}],
+        "meshes": [{"name": "tri", "primitives": [
+            {"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": FLOAT, "type": "VEC3",
+             "count": position_count if position_count is not None else len(positions)},
+            {"bufferView": 1, "componentType": UNSIGNED_SHORT, "type": "SCALAR",
+             "count": len(indices)},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": len(pos)},
+            {"buffer": 0, "byteOffset": len(pos), "byteLength": 2 * len(indices)},
+        ],
+        "buffers": [{"byteLength": len(buf), "uri": uri}],
+    }
+    return doc, buf
+
+
+def write_json(path, doc):
+    with open(path, "w") as f:
+        json.dump(doc, f)
+    return path
+
+
+def write_bytes(path, data):
+    with open(path, "wb") as f:
+        f.write(data)
+    return path
+
+
+def png_chunk(kind, data):
+    return (struct.pack(">I", len(data)) + kind + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+
+def textured_gltf(image_uri):
+    """The triangle with a material whose baseColorTexture is texture 0 → image 0."""
+    doc, _ = triangle_gltf()
+    doc["meshes"][0]["primitives"][0]["material"] = 0
+    doc["materials"] = [{"name": "painted",
+                         "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+    doc["textures"] = [{"source": 0}]
+    doc["images"] = [{"uri": image_uri}]
+    return doc
+
+
+# -- Bad input: one line, exit 1, no output -------------------------------------------------
+
+MESSAGES = []  # (case, command, stderr line) for the closing summary
+
+
+def expect_clean_error(case, args, names, outdir):
+    """Runs raysplat with args; exit 1, one stderr line 'raysplat: error: ...' that contains
+    every string of `names` (a tuple: any one of its strings), and `outdir` left as it was
+    (no outputs, no temporaries)."""
+    before = sorted(os.listdir(outdir)) if os.path.isdir(outdir) else None
+    r = run(*args)
+    lines = r.stderr.splitlines()
+    MESSAGES.append((case, args[0], lines[0] if len(lines) == 1 else r.stderr.strip()))
+    check(r.returncode >= 0 and r.returncode < 128,
+          "%s: killed by a signal or crashed (returncode %d): %s" % (case, r.returncode, r.stderr))
+    check(r.returncode == 1, "%s: exit code %d, expected 1; stderr: %r" % (case, r.returncode, r.stderr))
+    check(len(lines) == 1, "%s: stderr is %d lines, expected 1: %r" % (case, len(lines), r.stderr))
+    line = lines[0]
+    check(line.startswith("raysplat: error: "), "%s: %r does not start with 'raysplat: error: '" % (case, line))
+    for n in names:
+        alternatives = n if isinstance(n, tuple) else (n,)
+        check(any(a in line for a in alternatives), "%s: the message does not name %r: %r" % (case, n, line))
+    if before is not None:
+        after = sorted(os.listdir(outdir))
+        check(after == before, "%s: files left in the output directory: %s" % (case, sorted(set(after) - set(before))))
+    return line
+
+
+def render_and_info_fail(case, scene, names):
+    """Both `render` (with EXR, PNG and stats outputs requested; not --quiet, so any
+    warning or progress line would show) and `info` fail cleanly."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        expect_clean_error(case, ["render", scene, "-o", os.path.join(out, "img.exr"),
+                                  "--png", os.path.join(out, "img.png"),
+                                  "--stats-json", os.path.join(out, "stats.json"),
+                                  "--width", "16", "--spp", "1"], names, out)
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        expect_clean_error(case, ["info", scene], names, out)
+
+
+IMAGE_0 = ("image 0", "image[0]")
+
+
+def bad_scene_tests(tmp):
+    """(name, function) pairs, one per broken-scene case; files are written into tmp."""
+    def case(name, scene, *names):
+        return name, lambda: render_and_info_fail(name, scene, [os.path.basename(scene), *names])
+
+    # A missing file and a directory.
+    missing = os.path.join(tmp, "missing.gltf")
+    folder = os.path.join(tmp, "folder.gltf")
+    os.mkdir(folder)
+
+    invalid = write_bytes(os.path.join(tmp, "invalid_json.gltf"), b'{"asset": {"version": "2.0"}, "nodes": [')
+
+    # A .gltf whose external buffer file is missing.
+    doc, _ = triangle_gltf(bin_uri="no_such_buffer.bin")
+    no_bin = write_json(os.path.join(tmp, "missing_bin.gltf"), doc)
+
+    # Index 7 on a 3-vertex primitive.
+    doc, _ = triangle_gltf(indices=(0, 1, 7))
+    bad_index = write_json(os.path.join(tmp, "index_out_of_range.gltf"), doc)
+
+    # A NaN coordinate in the buffer (vertex 1's y).
+    doc, _ = triangle_gltf(positions=((0, 0, 0), (1, float("nan"), 0), (0, 1, 0)))
+    nan_vertex = write_json(os.path.join(tmp, "nan_vertex.gltf"), doc)
+
+    # POSITION accessor 0 claims 4 vertices; its bufferView holds 3.
+    doc, _ = triangle_gltf(position_count=4)
+    past_view = write_json(os.path.join(tmp, "accessor_past_view.gltf"), doc)
+
+    # An extension the renderer cannot do without.
+    doc, _ = triangle_gltf()
+    doc["extensionsUsed"] = doc["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    draco = write_json(os.path.join(tmp, "draco_required.gltf"), doc)
+
+    # A 0-byte PNG, and a PNG whose IHDR claims 0 x 0 pixels, as baseColorTexture.
+    write_bytes(os.path.join(tmp, "empty.png"), b"")
+    zero_png = write_json(os.path.join(tmp, "empty_png_texture.gltf"), textured_gltf("empty.png"))
+    ihdr = struct.pack(">IIBBBBB", 0, 0, 8, 2, 0, 0, 0)
+    zero_by_zero = (PNG_SIGNATURE + png_chunk(b"IHDR", ihdr)
+                    + png_chunk(b"IDAT", zlib.compress(b"")) + png_chunk(b"IEND", b""))
+    write_bytes(os.path.join(tmp, "zero_by_zero.png"), zero_by_zero)
+    zero_size_png = write_json(os.path.join(tmp, "zero_size_png_texture.gltf"),
+                               textured_gltf("zero_by_zero.png"))
+    zero_uri = "data:image/png;base64," + base64.b64encode(zero_by_zero).decode()
+    zero_data_uri = write_json(os.path.join(tmp, "zero_size_png_data_uri.gltf"), textured_gltf(zero_uri))
+    empty_data_uri = write_json(os.path.join(tmp, "empty_png_data_uri.gltf"),
+                                textured_gltf("data:image/png;base64,"))
+
+    # data/glossy_box.glb cut short: the BIN chunk is truncated. Once as it is (the header's
+    # length disagrees too), once with the header's total length patched to the file's length
+    # so that only the BIN chunk's own length is wrong.
+    with open(GLOSSY, "rb") as f:
+        glb = f.read()
+    cut = glb[:len(glb) // 2]
+    truncated = write_bytes(os.path.join(tmp, "truncated.glb"), cut)
+    patched = write_bytes(os.path.join(tmp, "truncated_chunk.glb"),
+                          cut[:8] + struct.pack("<I", len(cut)) + cut[12:])
+
+    empty_gltf = write_bytes(os.path.join(tmp, "empty.gltf"), b"")
+    empty_glb = write_bytes(os.path.join(tmp, "empty.glb"), b"")
+
+    return [
+        case("missing file", missing),
+        case("directory instead of a file", folder),
+        case("invalid JSON", invalid),
+        case("missing .bin", no_bin, "no_such_buffer.bin"),
+        case("index out of range", bad_index, "mesh 0", "7"),
+        case("NaN vertex", nan_vertex, "mesh 0", "vertex 1"),
+        case("accessor past its bufferView", past_view, "accessor 0"),
+        case("unsupported extensionsRequired", draco, "KHR_draco_mesh_compression"),
+        # The loader says "image 0"; errors passed on from tinygltf say "image[0]".
+        case("0-byte PNG texture", zero_png, IMAGE_0),
+        case("0-byte PNG texture as a data URI", empty_data_uri, IMAGE_0),
+        case("0x0 PNG texture", zero_size_png, IMAGE_0),
+        case("0x0 PNG texture as a data URI", zero_data_uri, IMAGE_0),
+        case("truncated .glb", truncated),
+        case(".glb with a truncated chunk", patched),
+        case("empty .gltf", empty_gltf),
+        case("empty .glb", empty_glb),
+    ]
+
+
+def bad_setting_tests():
+    def case(name, extra, *names, exr="img.exr", png="img.png", stats="stats.json"):
+        def test():
+            with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+                args = ["render", CORNELL]
+                if "NO_OUTPUT" not in extra:
+                    args += ["-o", os.path.join(out, exr)]
+                args += ["--png", os.path.join(out, png), "--stats-json", os.path.join(out, stats)]
+                args += [a for a in extra if a != "NO_OUTPUT"]
+                expect_clean_error(name, args, list(names), out)
+        return name, test
+
+    missing = os.path.join("no_such_dir", "out")
+    return [
+        case("--spp 0", ["--spp", "0", "--width", "16"], "--spp"),
+        case("--spp -3", ["--spp", "-3", "--width", "16"], "--spp"),
+        case("--spp abc", ["--spp", "abc", "--width", "16"], "--spp", "abc"),
+        case("--width 100000", ["--width", "100000", "--spp", "1"], "--width"),
+        case("--threads -1", ["--threads", "-1", "--width", "16", "--spp", "1"], "--threads"),
+        case("unknown option", ["--bogus-option", "--width", "16"], "--bogus-option"),
+        case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
+        # --quiet: these runs fail only when they write, after the progress lines of the render.
+        # DESIGN §10: a failed run leaves no output, so neither may the outputs written
+        # before the one that fails.
+        case("EXR directory does not exist", ["--width", "8", "--spp", "1", "--quiet"],
+             missing + ".exr", exr=missing + ".exr"),
+        case("PNG directory does not exist", ["--width", "8", "--spp", "1", "--quiet"],
+             missing + ".png", png=missing + ".png"),
+        case("stats JSON directory does not exist", ["--width", "8", "--spp", "1", "--quiet"],
+             missing + ".json", stats=missing + ".json"),
+    ]
+
+
+# -- Help and usage ----------------------------------------------------------------------
+
+
+def test_no_arguments_prints_usage_and_exits_2():
+    r = run()
+    check(r.returncode == 2, "exit code %d, expected 2" % r.returncode)
+    check("usage: raysplat" in r.stderr, "no usage on stderr: %r" % r.stderr)
+    check("render" in r.stderr and "info" in r.stderr, "usage does not list the commands: %r" % r.stderr)
+
+
+def test_help_of_each_command():
+    wanted = {
+        "render": ["usage: raysplat render", "-o", "--output", "--png", "--stats-json", "--spp",
+                   "--threads", "--time-limit", "--width", "--seed", "--help"],
+        "info": ["usage: raysplat info", "SCENE", "--help"],
+        "voxelize": ["usage: raysplat voxelize", "--help"],
+    }
+    for command, words in wanted.items():
+        r = run(command, "--help")
+        check(r.returncode == 0, "%s --help: exit code %d" % (command, r.returncode))
+        for w in words:
+            check(w in r.stdout, "%s --help does not mention %s: %r" % (command, w, r.stdout))
+    r = run("--help")
+    check(r.returncode == 0 and "usage: raysplat" in r.stdout, "raysplat --help: %d %r" % (r.returncode, r.stdout))
+
+
+def test_unknown_command_is_an_error():
+    with tempfile.TemporaryDirectory() as out:
+        expect_clean_error("unknown command", ["frobnicate", CORNELL], ["frobnicate"], out)
+
+
+# -- Good renders ---------------------------------------------------------------------------
+
+
+def exr_header(data):
+    """Parses an OpenEXR single-part scanline header: returns (attributes dict of raw bytes,
+    offset where the header ends)."""
+    check(data[:4] == EXR_MAGIC, "no EXR magic number")
+    pos, attrs = 8, {}
+    while data[pos] != 0:
+        end = data.index(b"\0", pos)
+        name = data[pos:end].decode()
+        tend = data.index(b"\0", end + 1)
+        kind = data[end + 1:tend].decode()
+        size = struct.unpack_from("<i", data, tend + 1)[0]
+        attrs[name] = (kind, data[tend + 5:tend + 5 + size])
+        pos = tend + 5 + size
+    return attrs, pos + 1
+
+
+def exr_pixel_chunks(data):
+    """The EXR's pixel data: everything after the header and the chunk offset table (the
+    offsets depend on the header's length, which holds timings)."""
+    attrs, end = exr_header(data)
+    xmin, ymin, xmax, ymax = struct.unpack("<4i", attrs["dataWindow"][1])
+    compression = attrs["compression"][1][0]
+    lines = {0: 1, 1: 1, 2: 1, 3: 16, 4: 32, 5: 16, 6: 32, 7: 16, 8: 32, 9: 256}[compression]
+    chunks = (ymax - ymin + 1 + lines - 1) // lines
+    return data[end + 8 * chunks:]
+
+
+def png_size(data):
+    check(data[:8] == PNG_SIGNATURE, "no PNG signature")
+    check(data[12:16] == b"IHDR", "the first PNG chunk is not IHDR")
+    return struct.unpack(">II", data[16:24])
+
+
+def png_pixels(data):
+    """The 8-bit RGB rows of raysplat's PNG (one IDAT, filter type 0 per row)."""
+    width, height = png_size(data)
+    pos, idat = 8, b""
+    while pos < len(data):
+        n = struct.unpack(">I", data[pos:pos + 4])[0]
+        if data[pos + 4:pos + 8] == b"IDAT":
+            idat += data[pos + 8:pos + 8 + n]
+        pos += 12 + n
+    raw = zlib.decompress(idat)
+    check(len(raw) == height * (1 + 3 * width), "PNG data is %d bytes for %dx%d" % (len(raw), width, height))
+    return b"".join(raw[y * (1 + 3 * width) + 1:(y + 1) * (1 + 3 * width)] for y in range(height))
+
+
+def render_good(scene, out, name, *extra):
+    exr, png, stats = (os.path.join(out, name + e) for e in (".exr", ".png", ".json"))
+    r = run("render", scene, "-o", exr, "--png", png, "--stats-json", stats, *extra, timeout=300)
+    check(r.returncode == 0, "render %s failed (%d): %s" % (scene, r.returncode, r.stderr))
+    with open(exr, "rb") as f:
+        exr_data = f.read()
+    with open(png, "rb") as f:
+        png_data = f.read()
+    with open(stats) as f:
+        stats_data = json.load(f)
+    return exr_data, png_data, stats_data
+
+
+def test_good_render_writes_exr_png_and_stats():
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        exr, png, stats = render_good(CORNELL, out, "cornell", "--width", "32", "--spp", "2",
+                                      "--photons", "5000", "--grid", "64")
+        check(sorted(os.listdir(out)) == ["cornell.exr", "cornell.json", "cornell.png"],
+              "unexpected files: %s" % sorted(os.listdir(out)))
+    check(exr[:4] == EXR_MAGIC, "the .exr does not start with 0x762f3101: %r" % exr[:4])
+    attrs, _ = exr_header(exr)
+    xmin, ymin, xmax, ymax = struct.unpack("<4i", attrs["dataWindow"][1])
+    # The Cornell camera's aspectRatio is 1: a 32-pixel-wide image is 32 high.
+    check((xmax - xmin + 1, ymax - ymin + 1) == (32, 32), "EXR data window %r" % ((xmin, ymin, xmax, ymax),))
+    channels = attrs["channels"][1]
+    for ch in (b"R\0", b"G\0", b"B\0", b"direct.R\0", b"indirect.G\0", b"emission.B\0", b"albedo.R\0", b"normal.B\0"):
+        check(ch in channels, "EXR has no channel %r" % ch)
+    check(png_size(png) == (32, 32), "PNG IHDR says %dx%d, expected 32x32" % png_size(png))
+    pixels = png_pixels(png)
+    check(max(pixels) > 0, "the PNG is black: the lit Cornell box must show something")
+    check("seconds" in stats and "counts" in stats, "stats JSON lacks seconds/counts: %r" % stats)
+    check(isinstance(stats["seconds"], dict) and all(v >= 0 for v in stats["seconds"].values()),
+          "stats seconds: %r" % stats["seconds"])
+    check(stats["counts"].get("triangles") == 36, "stats counts triangles %r, expected 36" % stats["counts"].get("triangles"))
+    check(stats["counts"].get("width") == 32 and stats["counts"].get("height") == 32, "stats size %r" % stats["counts"])
+
+
+# Counts that depend on timing or on the thread count itself, not on the image.
+TIMING_COUNTS = {"threads", "paths_per_second"}
+
+
+def test_one_and_two_threads_give_identical_pixels():
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        common = ("--width", "48", "--spp", "4", "--photons", "20000", "--grid", "96", "--quiet")
+        exr1, png1, stats1 = render_good(GLOSSY, out, "t1", "--threads", "1", *common)
+        exr2, png2, stats2 = render_good(GLOSSY, out, "t2", "--threads", "2", *common)
+    check(stats1["counts"]["threads"] == 1 and stats2["counts"]["threads"] == 2,
+          "thread counts %r, %r" % (stats1["counts"].get("threads"), stats2["counts"].get("threads")))
+    check(png1 == png2, "the PNG previews differ between --threads 1 and --threads 2")
+    # The EXR headers hold per-stage timings; the pixel chunks after them must match bit for bit.
+    check(exr_pixel_chunks(exr1) == exr_pixel_chunks(exr2),
+          "the EXR pixel data differs between --threads 1 and --threads 2")
+    c1 = {k: v for k, v in stats1["counts"].items() if k not in TIMING_COUNTS}
+    c2 = {k: v for k, v in stats2["counts"].items() if k not in TIMING_COUNTS}
+    check(c1 == c2, "stats counts differ: %r vs %r" % (c1, c2))
+
+
+# -- Runner ----------------------------------------------------------------------------------
+
+
+def main():
+    if not os.access(RAYSPLAT, os.X_OK):
+        print("cli_test: %s is not an executable (set RAYSPLAT)" % RAYSPLAT)
+        return 1
+    passed = failed = 0
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
+        tests = [("bad scene: " + n, f) for n, f in bad_scene_tests(tmp)]
+        tests += [("bad setting: " + n, f) for n, f in bad_setting_tests()]
+        tests += [(f.__name__, f) for f in (
+            test_unknown_command_is_an_error,
+            test_no_arguments_prints_usage_and_exits_2,
+            test_help_of_each_command,
+            test_good_render_writes_exr_png_and_stats,
+            test_one_and_two_threads_give_identical_pixels,
+        )]
+        for name, test in tests:
+            try:
+                test()
+                passed += 1
+                print("PASS  %s" % name)
+            except (Failure, subprocess.TimeoutExpired, OSError, KeyError, ValueError) as e:
+                failed += 1
+                print("FAIL  %s: %s" % (name, e))
+    print("\nerror messages printed:")
+    for case, command, line in MESSAGES:
+        print("  [%s, %s] %s" % (case, command, line))
+    print("%d passed, %d failed" % (passed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

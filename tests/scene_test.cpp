@@ -1,0 +1,668 @@
+// scene_test: the glTF loader (lib/scene.cpp) against expectations derived independently of
+// it — from scripts/make_scenes.py for the scenes in data/, and from transforms, areas and
+// windings worked out by hand for small glTF files that the tests write themselves.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "error.h"
+#include "log.h"
+#include "scene.h"
+
+using namespace rs;
+namespace fs = std::filesystem;
+
+namespace {
+
+// -- Helpers ----------------------------------------------------------------------------------
+
+std::string envOr(const char* name, const std::string& fallback) {
+    const char* v = std::getenv(name);
+    return v && *v ? std::string(v) : fallback;
+}
+
+std::string dataPath(const std::string& file) {
+    return (fs::path(envOr("RAYSPLAT_DATA", "data")) / file).string();
+}
+
+// A fresh directory under the system temp directory, removed with everything in it.
+class TempDir {
+public:
+    TempDir() {
+        static int counter = 0;
+        const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        std::string name = "raysplat_scene_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++) +
+                           "_" + (info ? info->name() : "x");
+        path_ = fs::temp_directory_path() / name;
+        fs::remove_all(path_);
+        fs::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path_, ec);
+    }
+    std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+private:
+    fs::path path_;
+};
+
+void writeFile(const std::string& path, const std::string& bytes) {
+    std::ofstream f(path, std::ios::binary);
+    f.write(bytes.data(), std::streamsize(bytes.size()));
+    ASSERT_TRUE(f.good()) << path;
+}
+
+std::string base64(const std::string& in) {
+    static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    size_t i = 0;
+    for (; i + 2 < in.size(); i += 3) {
+        uint32_t v = uint32_t(uint8_t(in[i])) << 16 | uint32_t(uint8_t(in[i + 1])) << 8 | uint8_t(in[i + 2]);
+        for (int s = 18; s >= 0; s -= 6) out += kAlphabet[(v >> s) & 63];
+    }
+    if (i + 1 == in.size()) {
+        uint32_t v = uint32_t(uint8_t(in[i])) << 16;
+        out += kAlphabet[(v >> 18) & 63];
+        out += kAlphabet[(v >> 12) & 63];
+        out += "==";
+    } else if (i + 2 == in.size()) {
+        uint32_t v = uint32_t(uint8_t(in[i])) << 16 | uint32_t(uint8_t(in[i + 1])) << 8;
+        out += kAlphabet[(v >> 18) & 63];
+        out += kAlphabet[(v >> 12) & 63];
+        out += kAlphabet[(v >> 6) & 63];
+        out += '=';
+    }
+    return out;
+}
+
+template <class T>
+std::string bytesOf(const std::vector<T>& v) {
+    return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+std::string join(const std::vector<std::string>& parts) {
+    std::string s;
+    for (size_t i = 0; i < parts.size(); ++i) s += (i ? "," : "") + parts[i];
+    return s;
+}
+
+constexpr int kUByte = 5121, kUShort = 5123, kUInt = 5125, kFloat = 5126;
+constexpr int kPoints = 0, kTriangles = 4, kStrip = 5, kFan = 6;
+
+// Builds a small glTF document: one binary buffer, and the JSON objects that refer to it.
+class GltfBuilder {
+public:
+    // Appends `bytes` as a new bufferView and an accessor over it; returns the accessor index.
+    int accessor(const std::string& bytes, int componentType, int count, const char* type) {
+        while (bin_.size() % 4) bin_.push_back('\0');
+        size_t offset = bin_.size();
+        bin_ += bytes;
+        views_.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) +
+                         ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
+        accessors_.push_back("{\"bufferView\":" + std::to_string(views_.size() - 1) +
+                             ",\"componentType\":" + std::to_string(componentType) +
+                             ",\"count\":" + std::to_string(count) + ",\"type\":\"" + type + "\"}");
+        return int(accessors_.size()) - 1;
+    }
+    int positions(const std::vector<Vec3>& p) {
+        std::vector<float> flat;
+        for (const Vec3& v : p) flat.insert(flat.end(), {v.x, v.y, v.z});
+        return accessor(bytesOf(flat), kFloat, int(p.size()), "VEC3");
+    }
+    int normals(const std::vector<Vec3>& n) { return positions(n); }
+    int indices32(const std::vector<uint32_t>& i) { return accessor(bytesOf(i), kUInt, int(i.size()), "SCALAR"); }
+
+    // A primitive's JSON: attributes POSITION (+ NORMAL), optional indices and material.
+    static std::string primitive(int pos, int indices = -1, int mode = kTriangles, int material = -1, int normal = -1) {
+        std::string s = "{\"attributes\":{\"POSITION\":" + std::to_string(pos);
+        if (normal >= 0) s += ",\"NORMAL\":" + std::to_string(normal);
+        s += "},\"mode\":" + std::to_string(mode);
+        if (indices >= 0) s += ",\"indices\":" + std::to_string(indices);
+        if (material >= 0) s += ",\"material\":" + std::to_string(material);
+        return s + "}";
+    }
+    int mesh(const std::vector<std::string>& primitives) {
+        meshes_.push_back("{\"primitives\":[" + join(primitives) + "]}");
+        return int(meshes_.size()) - 1;
+    }
+    int material(const std::string& json) {
+        materials_.push_back(json);
+        return int(materials_.size()) - 1;
+    }
+    // `fields` is the node's JSON body without braces, e.g. "\"mesh\":0,\"translation\":[1,2,3]".
+    // More top-level members, e.g. "\"textures\":[...],\"images\":[...]".
+    void extra(const std::string& members) { extra_ = members; }
+    int node(const std::string& fields, bool root = true) {
+        nodes_.push_back("{" + fields + "}");
+        int index = int(nodes_.size()) - 1;
+        if (root) roots_.push_back(index);
+        return index;
+    }
+
+    std::string json(const std::string& bufferUri) const {
+        std::vector<std::string> roots;
+        for (int r : roots_) roots.push_back(std::to_string(r));
+        std::string s = "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[" + join(roots) + "]}]";
+        s += ",\"nodes\":[" + join(nodes_) + "]";
+        s += ",\"meshes\":[" + join(meshes_) + "]";
+        if (!materials_.empty()) s += ",\"materials\":[" + join(materials_) + "]";
+        s += ",\"accessors\":[" + join(accessors_) + "]";
+        s += ",\"bufferViews\":[" + join(views_) + "]";
+        s += ",\"buffers\":[{\"byteLength\":" + std::to_string(bin_.size()) + ",\"uri\":\"" + bufferUri + "\"}]";
+        if (!extra_.empty()) s += "," + extra_;
+        return s + "}";
+    }
+    // Writes `dir/name.gltf`, with the buffer as a base64 data URI or as `dir/name.bin`.
+    std::string write(const TempDir& dir, const std::string& name, bool externalBin = false) const {
+        std::string uri = "data:application/octet-stream;base64," + base64(bin_);
+        if (externalBin) {
+            uri = name + ".bin";
+            writeFile(dir.file(uri), bin_);
+        }
+        std::string path = dir.file(name + ".gltf");
+        writeFile(path, json(uri));
+        return path;
+    }
+
+private:
+    std::string bin_;
+    std::vector<std::string> views_, accessors_, meshes_, materials_, nodes_;
+    std::vector<int> roots_;
+    std::string extra_;
+};
+
+// Unit cube [-0.5, 0.5]^3, 24 vertices, counter-clockwise seen from outside (as in make_scenes.py).
+void unitCube(std::vector<Vec3>& pos, std::vector<Vec3>& nrm, std::vector<uint32_t>& idx) {
+    for (int axis = 0; axis < 3; ++axis) {
+        Vec3 e0(0.f), e1(0.f), e2(0.f);
+        e0[axis] = 1.f;
+        e1[(axis + 1) % 3] = 1.f;
+        e2[(axis + 2) % 3] = 1.f;
+        for (float sign : {1.f, -1.f}) {
+            Vec3 c = 0.5f * sign * e0, u = 0.5f * e1, v = 0.5f * e2, n = sign * e0;
+            if (glm::dot(glm::cross(u, v), n) < 0.f) std::swap(u, v);
+            uint32_t base = uint32_t(pos.size());
+            pos.insert(pos.end(), {c - u - v, c + u - v, c + u + v, c - u + v});
+            nrm.insert(nrm.end(), 4, n);
+            idx.insert(idx.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+        }
+    }
+}
+
+// Triangle t of the scene as its three world positions.
+std::vector<Vec3> triangle(const Scene& s, size_t t) {
+    return {s.positions[3 * t], s.positions[3 * t + 1], s.positions[3 * t + 2]};
+}
+
+bool near(const Vec3& a, const Vec3& b, float eps = 1e-5f) { return glm::length(a - b) <= eps; }
+
+// True when `tri` is `want` up to a cyclic rotation (same vertices, same winding).
+bool sameTriangle(const std::vector<Vec3>& tri, const std::vector<Vec3>& want, float eps = 1e-5f) {
+    for (int r = 0; r < 3; ++r)
+        if (near(tri[0], want[r], eps) && near(tri[1], want[(r + 1) % 3], eps) && near(tri[2], want[(r + 2) % 3], eps))
+            return true;
+    return false;
+}
+
+::testing::AssertionResult trianglesAre(const Scene& s, const std::vector<std::vector<Vec3>>& want) {
+    if (s.triangleCount() != want.size())
+        return ::testing::AssertionFailure() << s.triangleCount() << " triangles, expected " << want.size();
+    for (size_t t = 0; t < want.size(); ++t)
+        if (!sameTriangle(triangle(s, t), want[t])) {
+            std::ostringstream m;
+            m << "triangle " << t << " is";
+            for (const Vec3& p : triangle(s, t)) m << " (" << p.x << ", " << p.y << ", " << p.z << ")";
+            m << ", expected";
+            for (const Vec3& p : want[t]) m << " (" << p.x << ", " << p.y << ", " << p.z << ")";
+            return ::testing::AssertionFailure() << m.str();
+        }
+    return ::testing::AssertionSuccess();
+}
+
+// Index of the material called `name`, or -1.
+int materialNamed(const Scene& s, const std::string& name) {
+    for (size_t m = 0; m < s.materials.size(); ++m)
+        if (s.materials[m].name == name) return int(m);
+    return -1;
+}
+
+// Triangles whose primitive came from the node called `node` (objectNames end in "(node i 'name')").
+std::vector<size_t> trianglesOfNode(const Scene& s, const std::string& node) {
+    std::vector<size_t> out;
+    std::string suffix = "'" + node + "')";
+    for (size_t t = 0; t < s.triangleCount(); ++t) {
+        const std::string& o = s.objectNames[s.triObject[t]];
+        if (o.size() >= suffix.size() && o.compare(o.size() - suffix.size(), suffix.size(), suffix) == 0) out.push_back(t);
+    }
+    return out;
+}
+
+Vec3 rotateY(const Vec3& v, float degrees) {
+    float a = degrees * kPi / 180.f, c = std::cos(a), s = std::sin(a);
+    return {c * v.x + s * v.z, v.y, -s * v.x + c * v.z};
+}
+
+// Every vertex of the node's triangles is one of the 8 corners of the box with this centre,
+// half extents and rotation about +Y, and every corner is used.
+void expectBox(const Scene& s, const std::string& node, Vec3 centre, Vec3 half, float yawDegrees) {
+    std::vector<Vec3> corners;
+    for (float x : {-1.f, 1.f})
+        for (float y : {-1.f, 1.f})
+            for (float z : {-1.f, 1.f}) corners.push_back(centre + rotateY(Vec3(x, y, z) * half, yawDegrees));
+    std::vector<size_t> tris = trianglesOfNode(s, node);
+    ASSERT_EQ(tris.size(), 12u) << node;
+    std::set<int> used;
+    for (size_t t : tris)
+        for (const Vec3& p : triangle(s, t)) {
+            int found = -1;
+            for (size_t c = 0; c < corners.size(); ++c)
+                if (near(p, corners[c], 1e-5f)) found = int(c);
+            EXPECT_GE(found, 0) << node << " vertex (" << p.x << ", " << p.y << ", " << p.z << ") is no box corner";
+            used.insert(found);
+        }
+    EXPECT_EQ(used.count(-1), 0u);
+    EXPECT_EQ(used.size(), 8u) << node;
+}
+
+void expectInside(const Scene& s, Vec3 lo, Vec3 hi, float eps = 1e-5f) {
+    for (const Vec3& p : s.positions)
+        ASSERT_TRUE(p.x >= lo.x - eps && p.y >= lo.y - eps && p.z >= lo.z - eps && p.x <= hi.x + eps &&
+                    p.y <= hi.y + eps && p.z <= hi.z + eps)
+            << "(" << p.x << ", " << p.y << ", " << p.z << ") outside the expected bounds";
+}
+
+class RecordingReporter : public Reporter {
+public:
+    void warn(const std::string& m) override { warnings.push_back(m); }
+    std::vector<std::string> warnings;
+};
+
+constexpr float kLightStrength = 25.f;
+const Vec3 kLightRgb(1.f, 0.78f, 0.5f);
+
+}  // namespace
+
+// -- The generated scenes in data/ (expectations from scripts/make_scenes.py) -----------------
+
+// Cornell box (.gltf + external .bin): 5 walls + light quad = 12 triangles, two 12-triangle cubes.
+TEST(DataScenes, CornellBoxCountsMaterialsAndCamera) {
+    Scene s = loadScene(dataPath("cornell_box.gltf"), silentReporter());
+    EXPECT_EQ(s.triangleCount(), 36u);
+    EXPECT_EQ(s.positions.size(), 3 * s.triangleCount());
+    EXPECT_EQ(s.normals.size(), s.positions.size());
+    EXPECT_EQ(s.uvs.size(), s.positions.size());
+    EXPECT_TRUE(s.lights.empty());
+    for (const char* name : {"white", "left_wall", "right_wall", "light"}) {
+        int m = materialNamed(s, name);
+        ASSERT_GE(m, 0) << name;
+        EXPECT_EQ(s.materials[m].kind, MaterialKind::Lambert) << name;
+    }
+    EXPECT_TRUE(near(s.materials[materialNamed(s, "left_wall")].baseColor, Vec3(0.63f, 0.065f, 0.05f)));
+
+    ASSERT_EQ(s.cameras.size(), 1u);
+    Camera c = s.camera();
+    EXPECT_TRUE(near(c.position, Vec3(0.f, 1.f, 3.4f))) << c.position.z;
+    EXPECT_TRUE(near(c.forward, Vec3(0.f, 0.f, -1.f)));
+    EXPECT_TRUE(near(c.up, Vec3(0.f, 1.f, 0.f)));
+    EXPECT_TRUE(near(c.right, Vec3(1.f, 0.f, 0.f)));
+    EXPECT_NEAR(c.yfov, 0.69f, 1e-6f);
+    EXPECT_NEAR(c.aspect, 1.f, 1e-6f);
+}
+
+// The ceiling light: emissiveFactor (1, 0.78, 0.5) × emissiveStrength 25, a 0.5 × 0.4 m quad at
+// y = 1.98 facing down, so it emits π·A·Le.
+TEST(DataScenes, CornellLightIsEmissionTimesStrength) {
+    Scene s = loadScene(dataPath("cornell_box.gltf"), silentReporter());
+    int light = materialNamed(s, "light");
+    ASSERT_GE(light, 0);
+    EXPECT_TRUE(near(s.materials[light].emission, kLightRgb * kLightStrength, 1e-4f));
+    float area = 0.f;
+    int emissive = 0;
+    for (size_t t = 0; t < s.triangleCount(); ++t) {
+        if (!s.materials[s.triMaterial[t]].isEmissive()) continue;
+        ++emissive;
+        area += s.triangleArea(t);
+        EXPECT_TRUE(near(s.geometricNormal(t), Vec3(0.f, -1.f, 0.f))) << "the light faces the floor";
+        for (const Vec3& p : triangle(s, t)) EXPECT_NEAR(p.y, 1.98f, 1e-5f);
+    }
+    EXPECT_EQ(emissive, 2);
+    EXPECT_NEAR(area, 0.2f, 1e-5f);
+    Vec3 expected = kPi * 0.2f * kLightRgb * kLightStrength;
+    EXPECT_TRUE(near(s.emittedPower(), expected, 1e-3f));
+}
+
+// The "boxes" parent translates by (0, 0, -0.1); its children's TRS put the tall box
+// (0.6 × 1.2 × 0.6, yaw 17°) centred at (-0.35, 0.6, -0.3) and the short cube (0.6, yaw -18°) at
+// (0.35, 0.3, 0.35): both stand on the floor y = 0.
+TEST(DataScenes, CornellBoxesFlattenedWhereTheGeneratorPutsThem) {
+    Scene s = loadScene(dataPath("cornell_box.gltf"), silentReporter());
+    expectBox(s, "tall_box", Vec3(-0.35f, 0.6f, -0.3f), Vec3(0.3f, 0.6f, 0.3f), 17.f);
+    expectBox(s, "short_box", Vec3(0.35f, 0.3f, 0.35f), Vec3(0.3f), -18.f);
+    for (const char* box : {"tall_box", "short_box"}) {
+        float minY = kInf;
+        for (size_t t : trianglesOfNode(s, box))
+            for (const Vec3& p : triangle(s, t)) minY = std::min(minY, p.y);
+        EXPECT_NEAR(minY, 0.f, 1e-5f) << box << " sits on the floor";
+    }
+    // Walls' normals point into the room: the floor's up, the back wall's towards +z.
+    for (size_t t : trianglesOfNode(s, "floor")) EXPECT_TRUE(near(s.geometricNormal(t), Vec3(0, 1, 0)));
+    for (size_t t : trianglesOfNode(s, "back_wall")) EXPECT_TRUE(near(s.geometricNormal(t), Vec3(0, 0, 1)));
+    // Cube faces point outward from the box centre.
+    for (size_t t : trianglesOfNode(s, "tall_box")) {
+        auto p = triangle(s, t);
+        Vec3 centroid = (p[0] + p[1] + p[2]) / 3.f;
+        EXPECT_GT(glm::dot(s.geometricNormal(t), centroid - Vec3(-0.35f, 0.6f, -0.3f)), 0.f);
+    }
+    expectInside(s, Vec3(-1, 0, -1), Vec3(1, 2, 1));
+    EXPECT_TRUE(near(s.bounds.lo, Vec3(-1, 0, -1)) && near(s.bounds.hi, Vec3(1, 2, 1)));
+}
+
+// Glossy box (.glb): the room's 12 triangles, a 40 × 20 UV sphere (40·(2·20 − 2) = 1520 triangles,
+// pole triangles skipped) and a 20-face icosahedron.
+TEST(DataScenes, GlossyBoxGlbHasGlassSphereAndGlossyGold) {
+    Scene s = loadScene(dataPath("glossy_box.glb"), silentReporter());
+    EXPECT_EQ(s.triangleCount(), 1552u);
+    int glass = materialNamed(s, "glass"), gold = materialNamed(s, "gold");
+    ASSERT_GE(glass, 0);
+    ASSERT_GE(gold, 0);
+    EXPECT_EQ(s.materials[glass].kind, MaterialKind::Glass);
+    EXPECT_NEAR(s.materials[glass].ior, 1.5f, 1e-6f);
+    EXPECT_EQ(s.materials[gold].kind, MaterialKind::Glossy);
+    EXPECT_NEAR(s.materials[gold].roughness, 0.3f, 1e-6f);
+    EXPECT_NEAR(s.materials[gold].metallic, 1.f, 1e-6f);
+    EXPECT_TRUE(near(s.materials[gold].baseColor, Vec3(1.f, 0.78f, 0.34f)));
+    int glassKinds = 0, glossyKinds = 0;
+    for (uint32_t m : std::set<uint32_t>(s.triMaterial.begin(), s.triMaterial.end())) {
+        glassKinds += s.materials[m].kind == MaterialKind::Glass;
+        glossyKinds += s.materials[m].kind == MaterialKind::Glossy;
+    }
+    EXPECT_EQ(glassKinds, 1);
+    EXPECT_EQ(glossyKinds, 1);
+
+    size_t glassTris = 0, goldTris = 0;
+    float goldMinY = kInf;
+    const Vec3 sphereCentre(-0.42f, 0.35f, 0.3f);
+    for (size_t t = 0; t < s.triangleCount(); ++t) {
+        if (int(s.triMaterial[t]) == glass) {
+            ++glassTris;
+            for (const Vec3& p : triangle(s, t)) EXPECT_NEAR(glm::length(p - sphereCentre), 0.35f, 1e-5f);
+        } else if (int(s.triMaterial[t]) == gold) {
+            ++goldTris;
+            for (const Vec3& p : triangle(s, t)) goldMinY = std::min(goldMinY, p.y);
+        }
+    }
+    EXPECT_EQ(glassTris, 1520u);
+    EXPECT_EQ(goldTris, 20u);
+    EXPECT_NEAR(goldMinY, 0.f, 1e-5f) << "one icosahedron face rests on the floor";
+    expectInside(s, Vec3(-1, 0, -1), Vec3(1, 2, 1));
+    EXPECT_TRUE(near(s.materials[materialNamed(s, "light")].emission, kLightRgb * kLightStrength, 1e-4f));
+}
+
+// direct_light.gltf (buffer as a data URI): a 6 × 6 m ground quad and four unit cubes
+// = 2 + 4·12 = 50 triangles; one 40 W/sr point light at (0.5, 3, 0.5).
+TEST(DataScenes, DirectLightDataUriPointLightAndCamera) {
+    Scene s = loadScene(dataPath("direct_light.gltf"), silentReporter());
+    EXPECT_EQ(s.triangleCount(), 50u);
+    ASSERT_EQ(s.lights.size(), 1u);
+    const PunctualLight& l = s.lights[0];
+    EXPECT_EQ(l.type, LightType::Point);
+    EXPECT_TRUE(near(l.position, Vec3(0.5f, 3.f, 0.5f)));
+    EXPECT_TRUE(near(l.intensity, Vec3(40.f)));
+    for (size_t t = 0; t < s.triangleCount(); ++t) EXPECT_FALSE(s.materials[s.triMaterial[t]].isEmissive());
+    EXPECT_NEAR(s.emittedPower().x, 4.f * kPi * 40.f, 1e-2f);
+
+    // Everything stands on the ground (y = 0); the highest point is the cap's top, 1.25 + 0.05.
+    expectInside(s, Vec3(-3, 0, -3), Vec3(3, 1.3f, 3));
+    EXPECT_NEAR(s.bounds.lo.y, 0.f, 1e-5f);
+    EXPECT_NEAR(s.bounds.hi.y, 1.3f, 1e-5f);
+    // The column (0.08 × 1.2 × 0.08) hangs under raised_block at (-0.4, 0, -1.2), yaw 20°.
+    expectBox(s, "column", Vec3(-0.4f, 0.6f, -1.2f), Vec3(0.04f, 0.6f, 0.04f), 20.f);
+
+    // The camera at (0, 4, 6) looks 40° down, straight towards -z.
+    Camera c = s.camera();
+    float a = 40.f * kPi / 180.f;
+    EXPECT_TRUE(near(c.position, Vec3(0.f, 4.f, 6.f)));
+    EXPECT_TRUE(near(c.forward, Vec3(0.f, -std::sin(a), -std::cos(a)), 1e-5f));
+    EXPECT_TRUE(near(c.right, Vec3(1.f, 0.f, 0.f), 1e-5f));
+    EXPECT_NEAR(c.aspect, 1.333f, 1e-5f);
+}
+
+// -- A scene from elsewhere ----------------------------------------------------------------------
+
+// NVIDIA's nvpro Cornell box (Iray exporter): 16 732 triangles in the file, emissive ceiling
+// panel with emissiveFactor [3, 3, 3], a 10 m room whose 5 cm thick walls reach ±5.05.
+TEST(SharedScenes, NvproCornellBoxLoads) {
+    const char* shared = std::getenv("RAYSPLAT_SHARED");
+    if (!shared || !*shared) GTEST_SKIP() << "RAYSPLAT_SHARED is not set";
+    std::string path = (fs::path(shared) / "scenes" / "nvpro-cornellbox" / "cornellBox.gltf").string();
+    if (!fs::exists(path)) GTEST_SKIP() << path << " is absent";
+    Scene s = loadScene(path, silentReporter());
+    EXPECT_GT(s.triangleCount(), 16000u);  // degenerate (zero-area) sphere pole triangles are dropped
+    EXPECT_LE(s.triangleCount(), 16732u);
+    size_t emissive = 0;
+    for (size_t t = 0; t < s.triangleCount(); ++t)
+        if (s.materials[s.triMaterial[t]].isEmissive()) {
+            ++emissive;
+            EXPECT_TRUE(near(s.materials[s.triMaterial[t]].emission, Vec3(3.f)));
+        }
+    EXPECT_GT(emissive, 0u);
+    EXPECT_TRUE(isFinite(s.bounds.lo) && isFinite(s.bounds.hi));
+    EXPECT_FALSE(s.bounds.empty());
+    expectInside(s, Vec3(-5.06f), Vec3(5.06f));
+    EXPECT_EQ(s.cameras.size(), 1u);
+    EXPECT_TRUE(isFinite(s.emittedPower()));
+    EXPECT_GT(s.emittedPower().x, 0.f);
+}
+
+// -- Emission --------------------------------------------------------------------------------
+
+// A 2 × 3 m quad with emissiveFactor (0.5, 1, 0.25) × emissiveStrength 4: Le = (2, 4, 1), and a
+// Lambertian emitter of one face radiates π·A·Le = π·6·Le. A non-emissive quad beside it adds nothing.
+TEST(Emission, EmittedPowerIsPiAreaRadiance) {
+    TempDir dir;
+    GltfBuilder g;
+    int quad = g.positions({{0, 0, 0}, {2, 0, 0}, {2, 3, 0}, {0, 3, 0}});
+    int idx = g.indices32({0, 1, 2, 0, 2, 3});
+    int other = g.positions({{5, 0, 0}, {6, 0, 0}, {6, 1, 0}});
+    int lamp = g.material(
+        "{\"name\":\"lamp\",\"emissiveFactor\":[0.5,1,0.25],"
+        "\"extensions\":{\"KHR_materials_emissive_strength\":{\"emissiveStrength\":4}}}");
+    int grey = g.material("{\"name\":\"grey\"}");
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(quad, idx, kTriangles, lamp),
+                                                 GltfBuilder::primitive(other, -1, kTriangles, grey)})));
+    Scene s = loadScene(g.write(dir, "lamp"), silentReporter());
+    ASSERT_EQ(s.triangleCount(), 3u);
+    const Vec3 le(2.f, 4.f, 1.f);
+    EXPECT_TRUE(near(s.materials[lamp].emission, le));
+    EXPECT_FALSE(s.materials[grey].isEmissive());
+    Vec3 power = s.emittedPower();
+    Vec3 expected = kPi * 6.f * le;
+    EXPECT_NEAR(power.x, expected.x, 1e-4f * expected.x);
+    EXPECT_NEAR(power.y, expected.y, 1e-4f * expected.y);
+    EXPECT_NEAR(power.z, expected.z, 1e-4f * expected.z);
+}
+
+// -- Loader details on hand-made files ------------------------------------------------------------
+
+// T(1,2,3) · R(90° about z) · S(2,1,1) takes (1,0,0) → (1,4,3), (0,1,0) → (0,2,3), (0,0,1) → (1,2,4).
+// One node gives it as a column-major matrix, another as a parent translation over a child's
+// rotation and scale: both must put the triangle there, winding kept (det = +2).
+TEST(Loader, MatrixAndParentTrsGiveHandComputedWorldVertices) {
+    TempDir dir;
+    GltfBuilder g;
+    int mesh = g.mesh({GltfBuilder::primitive(g.positions({{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}))});
+    std::string m = std::to_string(mesh);
+    g.node("\"name\":\"by_matrix\",\"mesh\":" + m + ",\"matrix\":[0,2,0,0, -1,0,0,0, 0,0,1,0, 1,2,3,1]");
+    const float h = std::sqrt(0.5f);
+    int child = g.node("\"name\":\"child\",\"mesh\":" + m + ",\"rotation\":[0,0," + std::to_string(h) + "," +
+                           std::to_string(h) + "],\"scale\":[2,1,1]",
+                       false);
+    g.node("\"name\":\"parent\",\"translation\":[1,2,3],\"children\":[" + std::to_string(child) + "]");
+    Scene s = loadScene(g.write(dir, "transforms"), silentReporter());
+    std::vector<Vec3> want = {{1, 4, 3}, {0, 2, 3}, {1, 2, 4}};
+    EXPECT_TRUE(trianglesAre(s, {want, want}));
+    ASSERT_EQ(trianglesOfNode(s, "by_matrix").size(), 1u);
+    ASSERT_EQ(trianglesOfNode(s, "child").size(), 1u);
+}
+
+// Without an indices accessor, vertices 3t..3t+2 form triangle t; a trailing partial triangle is dropped.
+TEST(Loader, NonIndexedPrimitive) {
+    TempDir dir;
+    GltfBuilder g;
+    std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {9, 9, 9}};
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions(p))})));
+    Scene s = loadScene(g.write(dir, "nonindexed"), silentReporter());
+    EXPECT_TRUE(trianglesAre(s, {{p[0], p[1], p[2]}, {p[3], p[4], p[5]}}));
+}
+
+// The same quad indexed with uint8, uint16 and uint32 indices (external .bin) gives the same
+// two triangles; index values above 255 in the wide types read back intact.
+TEST(Loader, IndexComponentTypes) {
+    std::vector<Vec3> quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    std::vector<uint32_t> order = {0, 1, 2, 0, 2, 3};
+    for (int type : {kUByte, kUShort, kUInt}) {
+        SCOPED_TRACE("componentType " + std::to_string(type));
+        TempDir dir;
+        GltfBuilder g;
+        // For the wide types, pad the vertex list so the quad lives at indices 300..303.
+        uint32_t base = type == kUByte ? 0 : 300;
+        std::vector<Vec3> pos(base, Vec3(7.f));
+        pos.insert(pos.end(), quad.begin(), quad.end());
+        int p = g.positions(pos);
+        std::string bytes;
+        for (uint32_t i : order) {
+            uint32_t v = base + i;
+            if (type == kUByte) bytes += char(uint8_t(v));
+            else if (type == kUShort) { uint16_t u = uint16_t(v); bytes.append(reinterpret_cast<char*>(&u), 2); }
+            else bytes.append(reinterpret_cast<char*>(&v), 4);
+        }
+        int idx = g.accessor(bytes, type, int(order.size()), "SCALAR");
+        g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(p, idx)})));
+        Scene s = loadScene(g.write(dir, "indices", /*externalBin=*/true), silentReporter());
+        EXPECT_TRUE(trianglesAre(s, {{quad[0], quad[1], quad[2]}, {quad[0], quad[2], quad[3]}}));
+    }
+}
+
+// glTF spec §3.7.2.1: strip triangle i is {v_i, v_i+(1+i%2), v_i+(2−i%2)}, fan triangle i is
+// {v_i+1, v_i+2, v_0}. A zigzag strip and a fan in the z = 0 plane, all counter-clockwise seen
+// from +z: every triangle's geometric normal must be +z.
+TEST(Loader, TriangleStripsAndFans) {
+    TempDir dir;
+    GltfBuilder g;
+    std::vector<Vec3> strip = {{0, 1, 0}, {0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {2, 1, 0}};
+    std::vector<Vec3> fan = {{0, 0, 5}, {1, 0, 5}, {1, 1, 5}, {0, 1, 5}, {-1, 1, 5}};
+    int ps = g.positions(strip), pf = g.positions(fan);
+    int is = g.indices32({0, 1, 2, 3, 4});
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(ps, is, kStrip),
+                                                 GltfBuilder::primitive(pf, -1, kFan)})));
+    Scene s = loadScene(g.write(dir, "strips"), silentReporter());
+    EXPECT_TRUE(trianglesAre(s, {{strip[0], strip[1], strip[2]},
+                                 {strip[1], strip[3], strip[2]},
+                                 {strip[2], strip[3], strip[4]},
+                                 {fan[1], fan[2], fan[0]},
+                                 {fan[2], fan[3], fan[0]},
+                                 {fan[3], fan[4], fan[0]}}));
+    for (size_t t = 0; t < s.triangleCount(); ++t) EXPECT_TRUE(near(s.geometricNormal(t), Vec3(0, 0, 1))) << t;
+}
+
+// A closed cube wound counter-clockwise from outside, placed with scale (−1, 1, 1) (a mirror,
+// det < 0) and, as a control, with scale (1, 1, 1): in both, every geometric normal and every
+// shading normal must point away from the cube's centre.
+TEST(Loader, MirroringScaleKeepsNormalsOutward) {
+    TempDir dir;
+    GltfBuilder g;
+    std::vector<Vec3> pos, nrm;
+    std::vector<uint32_t> idx;
+    unitCube(pos, nrm, idx);
+    int mesh = g.mesh({GltfBuilder::primitive(g.positions(pos), g.indices32(idx), kTriangles, -1, g.normals(nrm))});
+    std::string m = std::to_string(mesh);
+    g.node("\"name\":\"mirrored\",\"mesh\":" + m + ",\"translation\":[3,0,0],\"scale\":[-1,1,1]");
+    g.node("\"name\":\"plain\",\"mesh\":" + m + ",\"translation\":[-3,0,0]");
+    Scene s = loadScene(g.write(dir, "mirror"), silentReporter());
+    ASSERT_EQ(s.triangleCount(), 24u);
+    for (auto [node, centre] : {std::pair{"mirrored", Vec3(3, 0, 0)}, std::pair{"plain", Vec3(-3, 0, 0)}}) {
+        std::vector<size_t> tris = trianglesOfNode(s, node);
+        ASSERT_EQ(tris.size(), 12u) << node;
+        for (size_t t : tris) {
+            auto p = triangle(s, t);
+            Vec3 out = glm::normalize((p[0] + p[1] + p[2]) / 3.f - centre);
+            EXPECT_GT(glm::dot(s.geometricNormal(t), out), 0.5f) << node << " triangle " << t;
+            for (int k = 0; k < 3; ++k)
+                EXPECT_GT(glm::dot(s.normals[3 * t + k], out), 0.5f) << node << " shading normal, triangle " << t;
+        }
+    }
+}
+
+// A POINTS primitive is skipped with a warning naming the mesh and primitive; the mesh's
+// triangle primitive still loads, and nothing throws.
+TEST(Loader, PointsPrimitiveSkippedWithWarning) {
+    TempDir dir;
+    GltfBuilder g;
+    int points = g.positions({{0, 0, 0}, {1, 1, 1}});
+    int tri = g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(points, -1, kPoints),
+                                                 GltfBuilder::primitive(tri)})));
+    RecordingReporter reporter;
+    Scene s;
+    std::string path = g.write(dir, "points");
+    ASSERT_NO_THROW(s = loadScene(path, reporter));
+    EXPECT_EQ(s.triangleCount(), 1u);
+    ASSERT_EQ(reporter.warnings.size(), 1u);
+    const std::string& w = reporter.warnings[0];
+    EXPECT_NE(w.find("points.gltf"), std::string::npos) << w;
+    EXPECT_NE(w.find("mesh 0"), std::string::npos) << w;
+    EXPECT_NE(w.find("primitive 0"), std::string::npos) << w;
+}
+
+// A file whose only primitive is POINTS has nothing to render: an Error naming the file.
+TEST(Loader, OnlyPointsIsAnErrorNamingTheFile) {
+    TempDir dir;
+    GltfBuilder g;
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}}), -1, kPoints)})));
+    std::string path = g.write(dir, "only_points");
+    RecordingReporter reporter;
+    try {
+        loadScene(path, reporter);
+        FAIL() << "expected an Error";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Scene);
+        EXPECT_NE(std::string(e.what()).find("only_points.gltf"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(reporter.warnings.size(), 1u);
+}
+
+// A baseColorTexture whose image file is 0 bytes: tinygltf warns and leaves the image empty; the
+// load fails with one Error naming the file and "image 0", and the failed load reports no
+// warnings of its own (the CLI prints exactly one line).
+TEST(Loader, EmptyTextureImageIsOneErrorNamingTheImage) {
+    TempDir dir;
+    GltfBuilder g;
+    int painted = g.material("{\"name\":\"painted\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}");
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}),
+                                                                        -1, kTriangles, painted)})));
+    g.extra("\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"empty.png\"}]");
+    writeFile(dir.file("empty.png"), "");
+    std::string path = g.write(dir, "texture");
+
+    RecordingReporter reporter;
+    try {
+        loadScene(path, reporter);
+        FAIL() << "expected an Error";
+    } catch (const Error& e) {
+        std::string what = e.what();
+        EXPECT_NE(what.find("texture.gltf"), std::string::npos) << what;
+        EXPECT_NE(what.find("image 0"), std::string::npos) << what;
+        EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+    EXPECT_TRUE(reporter.warnings.empty()) << reporter.warnings.front();
+}
