@@ -74,30 +74,52 @@ void commitTemporary(const std::string& tmp, const std::string& path) {
     }
 }
 
-void writeFileAtomic(const std::string& path, const std::string& contents) {
-    std::string tmp = temporaryPathFor(path);
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        if (!f) throw Error(ErrorKind::Io, path + ": cannot write (directory missing or not writable)");
-        f.write(contents.data(), std::streamsize(contents.size()));
-        f.close();
-        if (!f) {
-            std::error_code ec;
-            std::filesystem::remove(tmp, ec);
-            throw Error(ErrorKind::Io, path + ": write failed");
-        }
+void writeFileTo(const std::string& file, const std::string& path, const std::string& contents) {
+    std::ofstream f(file, std::ios::binary);
+    if (!f) throw Error(ErrorKind::Io, path + ": cannot write (directory missing or not writable)");
+    f.write(contents.data(), std::streamsize(contents.size()));
+    f.close();
+    if (!f) {
+        std::error_code ec;
+        std::filesystem::remove(file, ec);
+        throw Error(ErrorKind::Io, path + ": write failed");
     }
-    commitTemporary(tmp, path);
+}
+
+void writeFileAtomic(const std::string& path, const std::string& contents) {
+    StagedFiles out;
+    writeFileTo(out.stage(path), path, contents);
+    out.commit();
+}
+
+StagedFiles::~StagedFiles() {
+    std::error_code ec;
+    for (const auto& f : files_) std::filesystem::remove(f.first, ec);
+}
+
+std::string StagedFiles::stage(const std::string& path) {
+    files_.emplace_back(temporaryPathFor(path), path);
+    return files_.back().first;
+}
+
+void StagedFiles::commit() {
+    for (const auto& [tmp, path] : files_) commitTemporary(tmp, path);
+    files_.clear();
 }
 
 void writeExr(const std::string& path, const Film& film, const ImageAttributes& attributes) {
+    StagedFiles out;
+    writeExrTo(out.stage(path), path, film, attributes);
+    out.commit();
+}
+
+void writeExrTo(const std::string& tmp, const std::string& path, const Film& film, const ImageAttributes& attributes) {
     std::vector<Vec3> beauty = film.beautyImage();
     std::vector<std::pair<std::string, const std::vector<Vec3>*>> buffers = {{"", &beauty}};
     for (int l = 0; l < kLayerCount; ++l) buffers.push_back({std::string(layerName(l)) + ".", &film.layers[l]});
     buffers.push_back({"albedo.", &film.albedo});
     buffers.push_back({"normal.", &film.normal});
 
-    std::string tmp = temporaryPathFor(path);
     try {
         Imf::Header header(film.width, film.height);
         header.compression() = Imf::ZIP_COMPRESSION;
@@ -121,7 +143,6 @@ void writeExr(const std::string& path, const Film& film, const ImageAttributes& 
         std::filesystem::remove(tmp, ec);
         throw Error(ErrorKind::Io, path + ": cannot write EXR: " + e.what());
     }
-    commitTemporary(tmp, path);
 }
 
 ExrImage readExr(const std::string& path) {
@@ -185,6 +206,10 @@ uint8_t encodeSrgb(float linear) {
 }  // namespace
 
 void writePng(const std::string& path, const Film& film, float exposureStops) {
+    writeFileAtomic(path, encodePng(film, exposureStops));
+}
+
+std::string encodePng(const Film& film, float exposureStops) {
     float gain = std::exp2(exposureStops);
     std::string raw;
     raw.reserve(film.pixelCount() * 3 + film.height);
@@ -199,7 +224,7 @@ void writePng(const std::string& path, const Film& film, float exposureStops) {
     std::string packed(size, '\0');
     if (compress2(reinterpret_cast<Bytef*>(packed.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
                   uLong(raw.size()), 6) != Z_OK)
-        throw Error(ErrorKind::Io, path + ": PNG compression failed");
+        throw Error(ErrorKind::Internal, "PNG compression failed");
     packed.resize(size);
 
     std::string ihdr;
@@ -210,7 +235,7 @@ void writePng(const std::string& path, const Film& film, float exposureStops) {
     appendChunk(out, "IHDR", ihdr);
     appendChunk(out, "IDAT", packed);
     appendChunk(out, "IEND", "");
-    writeFileAtomic(path, out);
+    return out;
 }
 
 }  // namespace rs

@@ -46,11 +46,29 @@ struct ExrImage {
 };
 ExrImage readExr(const std::string& path);
 
+// The bytes of the PNG preview (see writePng).
+std::string encodePng(const Film& film, float exposureStops);
+// Writes the EXR to `file` as is (not atomic); errors name `path`.
+void writeExrTo(const std::string& file, const std::string& path, const Film& film, const ImageAttributes& attributes);
+
 // Writes `contents` atomically (temporary file + rename); throws Error(Io).
 void writeFileAtomic(const std::string& path, const std::string& contents);
+void writeFileTo(const std::string& file, const std::string& path, const std::string& contents);
 // The temporary name used for an atomic write of `path`, in the same directory.
 std::string temporaryPathFor(const std::string& path);
 // Renames tmp to path; on failure removes tmp and throws Error(Io) naming path.
 void commitTemporary(const std::string& tmp, const std::string& path);
+
+// Several outputs that appear together or not at all: each is written under its temporary
+// name; commit() renames them all; files not committed are removed on destruction.
+class StagedFiles {
+public:
+    ~StagedFiles();
+    std::string stage(const std::string& path);  // returns the temporary name to write
+    void commit();
+
+private:
+    std::vector<std::pair<std::string, std::string>> files_;  // temporary, final
+};
 
 }  // namespace rs
