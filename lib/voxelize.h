@@ -22,12 +22,15 @@
 
 namespace rs {
 
+using IVec2 = glm::ivec2;
+
 enum class VoxelizerKind { Gpu, Cpu };
 
 struct VoxelizeTimings {
-    double upload = 0, raster = 0, readback = 0, reduction = 0;  // seconds
+    double setup = 0;  // EGL context and shader compilation, seconds
+    double upload = 0, raster = 0, readback = 0, reduction = 0;  // seconds; raster includes glFinish
     int passes = 0;  // draws of all triangles (axis × interval × viewport tile)
-    double total() const { return upload + raster + readback + reduction; }
+    double total() const { return setup + upload + raster + readback + reduction; }
 };
 
 OcclusionGrid voxelizeCpu(const Scene& scene, const GridGeometry& grid, ThreadPool& pool, Reporter& reporter);
@@ -52,10 +55,14 @@ constexpr int kMaxSlicesPerPass = 64;  // bits of one RG (or BA) mask
 // (c0, cu, cv, sign): the triangle's a-coordinate over the projection plane is
 // c0 + cu·u + cv·v (evaluated as (c0 + cu·u) + cv·v in float, no fused multiply-add), and
 // sign is that of the geometric normal's a-component (+1, −1, or 0 where the triangle is
-// parallel to a and its projection has no area).
+// parallel to a and its projection has no area). slices[3t + a] = (floor of the lowest,
+// floor of the highest vertex coordinate along a): the plane's slice is clamped to it, so
+// float rounding on steep triangles never puts a hit outside the triangle's own extent, and
+// the GPU can skip a triangle in the intervals it does not reach.
 struct VoxelTriangles {
-    std::vector<Vec3> positions;  // 3 per triangle, voxel space, snapped
-    std::vector<Vec4> planes;     // 3 per triangle
+    std::vector<Vec3> positions;    // 3 per triangle, voxel space, snapped
+    std::vector<Vec4> planes;       // 3 per triangle
+    std::vector<IVec2> slices;      // 3 per triangle
     size_t count() const { return positions.size() / 3; }
 };
 VoxelTriangles prepareVoxelTriangles(const Scene& scene, const GridGeometry& grid);
