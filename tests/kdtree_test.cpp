@@ -1,0 +1,656 @@
+// The occlusion tree against the dense grid: the build covers every voxel with the right
+// node, keeps each voxel's eye samples contiguous and collapses uniform blocks; the cylinder
+// traversal reaches the same eye samples with the same visibility as a brute-force walk over
+// the grid (kdtree_traverse.h's definitions, re-implemented here without the tree), and
+// walls, holes, lit surfaces and thin double-sided slabs behave as the paper says.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <set>
+
+#include "kdtree.h"
+#include "kdtree_traverse.h"
+
+using namespace rs;
+
+namespace {
+
+GridGeometry makeGeometry(IVec3 dims, Vec3 origin = Vec3(-1.3f, 0.2f, 2.f), float voxelSize = 0.25f) {
+    GridGeometry g;
+    g.dims = dims;
+    g.origin = origin;
+    g.voxelSize = voxelSize;
+    return g;
+}
+
+// Eye samples at the given voxel-space points; `pixel` keeps each one's identity.
+EyeSamples makeSamples(const GridGeometry& g, const std::vector<Vec3>& pVoxel) {
+    EyeSamples s;
+    for (size_t i = 0; i < pVoxel.size(); ++i) {
+        s.position.push_back(g.worldFromVoxel(pVoxel[i]));
+        s.normal.push_back(encodeUnit(Vec3(0, 0, 1)));
+        s.geomNormal.push_back(encodeUnit(Vec3(0, 0, 1)));
+        s.toViewer.push_back(encodeUnit(Vec3(0, 0, 1)));
+        s.material.push_back(0);
+        s.uv.push_back(Vec2(0.f));
+        s.pixel.push_back(uint32_t(i));
+        s.weight.push_back(Vec3(1.f));
+    }
+    return s;
+}
+
+void setCounts(OcclusionGrid& grid, int x, int y, int z, std::initializer_list<std::pair<Side, int>> counts) {
+    uint8_t* c = grid.voxel(grid.geometry.index(x, y, z));
+    for (auto [side, n] : counts) c[side] = uint8_t(n);
+}
+
+// A random grid: occupied voxels with random counts (some ambiguous), a few uniform blocks.
+OcclusionGrid randomGrid(std::mt19937& rng, IVec3 dims, float occupiedFraction) {
+    OcclusionGrid grid(makeGeometry(dims));
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::uniform_int_distribution<int> count(1, 16);
+    for (size_t i = 0; i < grid.geometry.voxelCount(); ++i) {
+        if (u01(rng) >= occupiedFraction) continue;
+        uint8_t* c = grid.voxel(i);
+        for (int a = 0; a < 3; ++a) {
+            float r = u01(rng);
+            if (r < 0.35f) c[2 * a] = uint8_t(count(rng));
+            else if (r < 0.7f) c[2 * a + 1] = uint8_t(count(rng));
+            else if (r < 0.8f) c[2 * a] = uint8_t(count(rng)), c[2 * a + 1] = uint8_t(count(rng));  // ambiguous
+        }
+        if (!grid.occupied(i)) c[kPosZ] = 16;
+    }
+    std::uniform_int_distribution<int> side(0, 5);
+    for (int b = 0; b < 2; ++b) {  // uniform blocks, to be collapsed
+        IVec3 lo(int(u01(rng) * dims.x * 0.6f), int(u01(rng) * dims.y * 0.6f), int(u01(rng) * dims.z * 0.6f));
+        IVec3 hi = glm::min(dims, lo + IVec3(5, 4, 6));
+        uint8_t c[kSideCount] = {};
+        c[side(rng)] = 16;
+        c[side(rng)] = 9;
+        for (int z = lo.z; z < hi.z; ++z)
+            for (int y = lo.y; y < hi.y; ++y)
+                for (int x = lo.x; x < hi.x; ++x)
+                    std::copy(c, c + kSideCount, grid.voxel(grid.geometry.index(x, y, z)));
+    }
+    return grid;
+}
+
+std::vector<Vec3> randomPoints(std::mt19937& rng, IVec3 dims, int n) {
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::vector<Vec3> p;
+    for (int i = 0; i < n; ++i) p.push_back(Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z));
+    return p;
+}
+
+Vec3 randomDirection(std::mt19937& rng) {
+    std::normal_distribution<float> g;
+    Vec3 d;
+    do d = Vec3(g(rng), g(rng), g(rng));
+    while (glm::length(d) < 1e-3f);
+    return glm::normalize(d);
+}
+
+// ---- Brute force: the definitions of kdtree_traverse.h over the dense grid -------------
+
+// V of every eye sample (by index), 0 when not reached or fully occluded.
+std::vector<float> bruteForceVisibility(const OcclusionGrid& grid, const EyeSamples& samples, uint32_t sampleCount,
+                                        const Cylinder& cyl) {
+    const GridGeometry& g = grid.geometry;
+    const Vec3 o = cyl.origin, w = cyl.dir, n = cyl.originNormal;
+    int N = 0;
+    if (std::abs(w.y) > std::abs(w[N])) N = 1;
+    if (std::abs(w.z) > std::abs(w[N])) N = 2;
+    const int U = (N + 1) % 3, V = (N + 2) % 3;
+    float r[3];
+    const float h = cyl.radius, hOcc = h + kOccluderMargin;
+    for (int b = 0; b < 3; ++b) r[b] = hOcc * std::sqrt(std::max(0.f, 1.f - w[b] * w[b]));
+    auto axisDistance2 = [&](Vec3 d) {  // squared distance of o + d to the axis line
+        float along = glm::dot(d, w);
+        return glm::dot(d, d) - along * along;
+    };
+    auto met = [&](IVec3 v) {
+        float t0 = 0.f, t1 = cyl.length;
+        for (int a = 0; a < 3; ++a) {
+            float dLo = (float(v[a]) - r[a]) - o[a], dHi = (float(v[a] + 1) + r[a]) - o[a];
+            if (w[a] > 0.f) t0 = std::max(t0, dLo / w[a]), t1 = std::min(t1, dHi / w[a]);
+            else if (w[a] < 0.f) t1 = std::min(t1, dLo / w[a]), t0 = std::max(t0, dHi / w[a]);
+            else if (dLo > 0.f || dHi < 0.f) return false;
+        }
+        return t0 <= t1;
+    };
+    auto slice = [&](int vN) { return w[N] >= 0.f ? vN : g.dims[N] - 1 - vN; };
+    auto project = [&](Vec3 p, int A) { return (p[A] - o[A]) - (w[A] / w[N]) * (p[N] - o[N]); };
+
+    // Occluders of every met voxel, walked slice by slice front to back, kept per cell.
+    std::map<std::pair<int, int>, std::vector<std::pair<int, float>>> cells;  // cell → (slice, occ)
+    bool hasNormal = n != Vec3(0.f);
+    for (int sl = 0; sl < g.dims[N]; ++sl) {
+        int layer = w[N] >= 0.f ? sl : g.dims[N] - 1 - sl;
+        IVec3 v;
+        v[N] = layer;
+        for (v[V] = 0; v[V] < g.dims[V]; ++v[V])
+            for (v[U] = 0; v[U] < g.dims[U]; ++v[U]) {
+                size_t i = g.index(v.x, v.y, v.z);
+                if (!grid.occupied(i) || !met(v)) continue;
+                Vec3 c = Vec3(v) + Vec3(0.5f);
+                if (hasNormal && glm::dot(c - o, n) <= 0.5f * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z))) continue;
+                const uint8_t* cnt = grid.voxel(i);
+                float occ = 0.f;
+                for (int a = 0; a < 3; ++a)
+                    occ += std::abs(w[a]) / (16.f * std::abs(w[N])) * float(cnt[w[a] >= 0.f ? 2 * a : 2 * a + 1]);
+                occ = std::min(1.f, occ);
+                if (occ <= 0.f) continue;
+                int eff = slice(layer);
+                bool ambiguous = (cnt[0] && cnt[1]) || (cnt[2] && cnt[3]) || (cnt[4] && cnt[5]);
+                if (ambiguous) {
+                    int d = 0;
+                    for (int a = 1; a < 3; ++a)
+                        if (cnt[2 * a] + cnt[2 * a + 1] > cnt[2 * d] + cnt[2 * d + 1]) d = a;
+                    float ratio = std::abs(w[d]) == 0.f ? 1e9f : std::abs(w[N]) / std::abs(w[d]);
+                    eff += int(std::min(4.f, std::max(1.f, std::ceil(ratio))));
+                }
+                cells[{int(std::floor(project(c, U))), int(std::floor(project(c, V)))}].push_back({eff, occ});
+            }
+    }
+    auto validCell = [&](int i, int j) {
+        Vec3 q(0.f);
+        q[U] = float(i) + 0.5f;
+        q[V] = float(j) + 0.5f;
+        return axisDistance2(q) <= sqr(h + kValidCellMargin);
+    };
+    auto cellValue = [&](int i, int j, int sampleSlice) {
+        auto it = cells.find({i, j});
+        if (it == cells.end()) return 0.f;
+        float sum = 0.f;
+        for (auto [eff, occ] : it->second)
+            if (eff < sampleSlice) sum += occ;
+        return std::min(1.f, sum);
+    };
+
+    std::vector<float> vis(samples.size(), 0.f);
+    for (uint32_t s = 0; s < sampleCount; ++s) {
+        Vec3 p = g.voxelFromWorld(samples.position[s]);
+        IVec3 v(glm::floor(p));
+        if (!met(v) || axisDistance2(p - o) >= h * h) continue;
+        float x = project(p, U) - 0.5f, y = project(p, V) - 0.5f;
+        int i = int(std::floor(x)), j = int(std::floor(y));
+        float fx = x - std::floor(x), fy = y - std::floor(y);
+        int sl = slice(v[N]);
+        float num = 0.f, den = 0.f;
+        const float weights[4] = {(1.f - fx) * (1.f - fy), fx * (1.f - fy), (1.f - fx) * fy, fx * fy};
+        for (int k = 0; k < 4; ++k) {
+            int ci = i + (k & 1), cj = j + (k >> 1);
+            if (weights[k] <= 0.f || !validCell(ci, cj)) continue;
+            num += weights[k] * cellValue(ci, cj, sl);
+            den += weights[k];
+        }
+        EXPECT_GT(den, 0.f) << "a reached sample without a valid cell";
+        vis[s] = den > 0.f ? 1.f - num / den : 1.f;
+    }
+    return vis;
+}
+
+std::vector<float> traverse(const OcclusionTree& tree, const EyeSamples& samples, const Cylinder& cyl,
+                            TraversalScratch& scratch, TraversalStats* stats = nullptr) {
+    std::vector<float> vis(samples.size(), 0.f);
+    std::vector<int> visits(samples.size(), 0);
+    TraversalStats st;
+    traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) {
+        vis[i] = v;
+        ++visits[i];
+    }, &st);
+    for (size_t i = 0; i < visits.size(); ++i) EXPECT_LE(visits[i], 1) << "sample " << i << " visited twice";
+    EXPECT_EQ(st.maskOverflow, 0u);
+    if (stats) *stats = st;
+    return vis;
+}
+
+struct Comparison {
+    size_t reached = 0, partial = 0, setMismatch = 0, valueMismatch = 0;
+    float maxError = 0.f;
+};
+
+Comparison compare(const std::vector<float>& tree, const std::vector<float>& brute) {
+    Comparison c;
+    for (size_t i = 0; i < tree.size(); ++i) {
+        c.reached += brute[i] > 0.f;
+        c.partial += brute[i] > 0.f && brute[i] < 1.f;
+        if ((tree[i] > 0.f) != (brute[i] > 0.f)) ++c.setMismatch;
+        float e = std::abs(tree[i] - brute[i]);
+        c.maxError = std::max(c.maxError, e);
+        if (e > 1e-6f) ++c.valueMismatch;
+    }
+    return c;
+}
+
+// Every node's box, for checks of the build.
+template <class Fn>
+void walkTree(const OcclusionTree& tree, Fn&& fn) {
+    struct Item {
+        uint32_t node;
+        IVec3 lo, hi;
+    };
+    std::vector<Item> stack{{0, IVec3(0), tree.geometry.dims}};
+    while (!stack.empty()) {
+        Item it = stack.back();
+        stack.pop_back();
+        const Node& n = tree.nodes[it.node];
+        fn(it.node, n, it.lo, it.hi);
+        if (n.type() == NodeType::Split) {
+            Item lower = it, upper = it;
+            lower.node = it.node + 1;
+            upper.node = n.upperChild();
+            lower.hi[n.axis()] = upper.lo[n.axis()] = n.plane();
+            stack.push_back(upper);
+            stack.push_back(lower);
+        } else if (n.type() == NodeType::Visible) {
+            stack.push_back({it.node + 1, it.lo, it.hi});
+        }
+    }
+}
+
+}  // namespace
+
+// ---- Build ---------------------------------------------------------------------------
+
+TEST(OcclusionTreeBuild, NodeIsEightBytes) {
+    static_assert(sizeof(Node) == 8);
+    EXPECT_EQ(sizeof(Node), 8u);
+    uint8_t c[kSideCount] = {16, 0, 3, 16, 0, 7};
+    Node n = Node::occlusion(c);
+    EXPECT_EQ(n.type(), NodeType::Occlusion);
+    for (int s = 0; s < kSideCount; ++s) EXPECT_EQ(n.count(s), c[s]);
+    EXPECT_TRUE(n.ambiguous());  // 3 on +y, 16 on −y
+    EXPECT_EQ(n.dominantAxis(), 1);  // 3 + 16 on y
+    Vec3 expected = glm::normalize(Vec3(16, 3 - 16, -7));
+    EXPECT_NEAR(glm::dot(n.normal(), expected), 1.f, 1e-3f);
+    Node s = Node::split(2, 4096, 123456789u);
+    EXPECT_EQ(s.type(), NodeType::Split);
+    EXPECT_EQ(s.axis(), 2);
+    EXPECT_EQ(s.plane(), 4096);
+    EXPECT_EQ(s.upperChild(), 123456789u);
+    Node v = Node::visible(4000000000u, (1u << 30) - 1);
+    EXPECT_EQ(v.type(), NodeType::Visible);
+    EXPECT_EQ(v.firstSample(), 4000000000u);
+    EXPECT_EQ(v.sampleCount(), (1u << 30) - 1);
+}
+
+TEST(OcclusionTreeBuild, EmptyGridWithoutSamplesIsOneEmptyNode) {
+    OcclusionGrid grid(makeGeometry({40, 17, 23}));
+    EyeSamples samples;
+    ThreadPool pool(2);
+    OcclusionTreeStats st;
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool, &st);
+    ASSERT_EQ(tree.nodes.size(), 1u);
+    EXPECT_EQ(tree.nodes[0].type(), NodeType::Empty);
+    EXPECT_EQ(st.empty, 1u);
+    EXPECT_EQ(st.bytes, 8u);
+}
+
+TEST(OcclusionTreeBuild, UniformSolidBlockCollapsesToOneOcclusionNode) {
+    ThreadPool pool(2);
+    {
+        OcclusionGrid grid(makeGeometry({13, 8, 21}));
+        for (size_t i = 0; i < grid.geometry.voxelCount(); ++i) grid.voxel(i)[kPosY] = 16, grid.voxel(i)[kNegX] = 5;
+        EyeSamples samples;
+        OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+        ASSERT_EQ(tree.nodes.size(), 1u);
+        EXPECT_EQ(tree.nodes[0].type(), NodeType::Occlusion);
+        EXPECT_EQ(tree.nodes[0].count(kPosY), 16);
+        EXPECT_EQ(tree.nodes[0].count(kNegX), 5);
+    }
+    {
+        // A block in empty space: the empty space is cut off, the block collapses.
+        OcclusionGrid grid(makeGeometry({32, 32, 32}));
+        for (int z = 4; z < 12; ++z)
+            for (int y = 9; y < 13; ++y)
+                for (int x = 20; x < 27; ++x) setCounts(grid, x, y, z, {{kPosZ, 16}});
+        EyeSamples samples;
+        OcclusionTreeStats st;
+        buildOcclusionTree(grid, samples, pool, &st);
+        EXPECT_EQ(st.collapsedVoxels, 8u * 4 * 7);
+        EXPECT_LE(st.occlusion, 8u);
+    }
+}
+
+// Every voxel is covered by exactly one leaf, with the grid's counts; every voxel with eye
+// samples has a Visible node right above its leaf, holding exactly its samples, contiguous.
+TEST(OcclusionTreeBuild, LeavesMatchGridAndSamplesAreContiguousPerVisibleNode) {
+    std::mt19937 rng(7);
+    ThreadPool pool(3);
+    for (int trial = 0; trial < 4; ++trial) {
+        IVec3 dims(17 + trial * 5, 23, 11 + trial * 7);
+        OcclusionGrid grid = randomGrid(rng, dims, 0.1f + 0.1f * trial);
+        std::vector<Vec3> pts = randomPoints(rng, dims, 3000);
+        for (int i = 0; i < 300; ++i) pts.push_back(Vec3(pts[size_t(i)]));  // shared voxels
+        pts.push_back(Vec3(-0.5f, 3.f, 3.f));                               // outside: moved to the end
+        pts.push_back(Vec3(3.f, float(dims.y) + 0.01f, 3.f));
+        EyeSamples samples = makeSamples(grid.geometry, pts);
+        OcclusionTreeStats st;
+        OcclusionTree tree = buildOcclusionTree(grid, samples, pool, &st);
+        ASSERT_EQ(samples.size(), pts.size());
+        EXPECT_EQ(st.samplesOutside, 2u);
+        EXPECT_EQ(tree.sampleCount, pts.size() - 2);
+        EXPECT_EQ(samples.pixel[tree.sampleCount], pts.size() - 2);  // outside ones keep their order
+        EXPECT_EQ(st.nodes, st.empty + st.split + st.occlusion + st.visible);
+
+        std::vector<int> leafCover(grid.geometry.voxelCount(), 0);
+        std::vector<int> sampleSeen(tree.sampleCount, 0);
+        std::vector<uint8_t> visibleVoxel(grid.geometry.voxelCount(), 0);
+        walkTree(tree, [&](uint32_t index, const Node& n, IVec3 lo, IVec3 hi) {
+            if (n.type() == NodeType::Visible) {
+                ASSERT_EQ(hi - lo, IVec3(1));
+                NodeType child = tree.nodes[index + 1].type();
+                EXPECT_TRUE(child == NodeType::Occlusion || child == NodeType::Empty);
+                visibleVoxel[grid.geometry.index(lo.x, lo.y, lo.z)] = 1;
+                EXPECT_GT(n.sampleCount(), 0u);
+                for (uint32_t s = n.firstSample(); s < n.firstSample() + n.sampleCount(); ++s) {
+                    ASSERT_LT(s, tree.sampleCount);
+                    ++sampleSeen[s];
+                    EXPECT_EQ(IVec3(glm::floor(grid.geometry.voxelFromWorld(samples.position[s]))), lo);
+                }
+            }
+            if (n.type() != NodeType::Empty && n.type() != NodeType::Occlusion) return;
+            for (int z = lo.z; z < hi.z; ++z)
+                for (int y = lo.y; y < hi.y; ++y)
+                    for (int x = lo.x; x < hi.x; ++x) {
+                        size_t i = grid.geometry.index(x, y, z);
+                        ++leafCover[i];
+                        if (n.type() == NodeType::Empty) {
+                            EXPECT_FALSE(grid.occupied(i));
+                        } else {
+                            for (int s = 0; s < kSideCount; ++s) EXPECT_EQ(n.count(s), grid.voxel(i)[s]);
+                            EXPECT_EQ(n.ambiguous(), grid.ambiguous(i));
+                        }
+                    }
+        });
+        for (size_t i = 0; i < leafCover.size(); ++i) ASSERT_EQ(leafCover[i], 1) << "voxel " << i;
+        for (uint32_t s = 0; s < tree.sampleCount; ++s) ASSERT_EQ(sampleSeen[s], 1) << "sample " << s;
+        for (uint32_t s = 0; s < tree.sampleCount; ++s) {
+            IVec3 v(glm::floor(grid.geometry.voxelFromWorld(samples.position[s])));
+            EXPECT_TRUE(visibleVoxel[grid.geometry.index(v.x, v.y, v.z)]);
+        }
+        EXPECT_GT(st.collapsedVoxels, 0u);
+    }
+}
+
+TEST(OcclusionTreeBuild, SameTreeAndOrderWhateverTheThreadCount) {
+    std::mt19937 rng(11);
+    IVec3 dims(37, 29, 31);
+    OcclusionGrid grid = randomGrid(rng, dims, 0.2f);
+    std::vector<Vec3> pts = randomPoints(rng, dims, 20000);
+    EyeSamples a = makeSamples(grid.geometry, pts), b = a;
+    ThreadPool one(1), many(4);
+    OcclusionTree ta = buildOcclusionTree(grid, a, one), tb = buildOcclusionTree(grid, b, many);
+    ASSERT_EQ(ta.nodes.size(), tb.nodes.size());
+    for (size_t i = 0; i < ta.nodes.size(); ++i) ASSERT_EQ(ta.nodes[i].bits, tb.nodes[i].bits);
+    EXPECT_EQ(a.pixel, b.pixel);
+}
+
+// ---- Traversal -----------------------------------------------------------------------
+
+TEST(OcclusionTreeTraversal, MatchesBruteForceOnRandomGrids) {
+    std::mt19937 rng(2024);
+    ThreadPool pool(2);
+    TraversalScratch scratch;
+    Comparison total;
+    size_t cylinders = 0, occluded = 0;
+    for (int trial = 0; trial < 6; ++trial) {
+        IVec3 dims(20 + 3 * trial, 26 - trial, 18 + 2 * trial);
+        OcclusionGrid grid = randomGrid(rng, dims, 0.04f + 0.03f * trial);
+        EyeSamples samples = makeSamples(grid.geometry, randomPoints(rng, dims, 6000));
+        OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+        std::uniform_real_distribution<float> u01(0.f, 1.f);
+        for (int c = 0; c < 60; ++c) {
+            Cylinder cyl;
+            cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
+            if (c % 7 == 0) cyl.origin -= Vec3(5.f, 0.f, 3.f);  // starting outside the grid
+            cyl.dir = randomDirection(rng);
+            if (c % 5 == 0) cyl.dir = Vec3(0.f, c % 10 == 0 ? 1.f : -1.f, 0.f);  // axis-aligned
+            cyl.radius = 0.5f + u01(rng) * 5.f;
+            cyl.length = u01(rng) * 40.f;
+            if (c % 2 == 0) {
+                Vec3 nrm = randomDirection(rng);
+                cyl.originNormal = glm::dot(nrm, cyl.dir) < 0.f ? -nrm : nrm;
+            }
+            std::vector<float> brute = bruteForceVisibility(grid, samples, tree.sampleCount, cyl);
+            std::vector<float> got = traverse(tree, samples, cyl, scratch);
+            Comparison cmp = compare(got, brute);
+            EXPECT_EQ(cmp.setMismatch, 0u) << "trial " << trial << " cylinder " << c;
+            EXPECT_EQ(cmp.valueMismatch, 0u) << "trial " << trial << " cylinder " << c << " max error " << cmp.maxError;
+            total.reached += cmp.reached;
+            total.partial += cmp.partial;
+            total.maxError = std::max(total.maxError, cmp.maxError);
+            ++cylinders;
+            occluded += cmp.partial > 0;
+        }
+    }
+    // The comparison must not be vacuous: many samples reached, many partly occluded.
+    EXPECT_GT(total.reached, 10000u);
+    EXPECT_GT(total.partial, 1000u);
+    std::printf("  %zu cylinders, %zu samples reached (%zu partly occluded), max |ΔV| %.2g\n", cylinders,
+                total.reached, total.partial, double(total.maxError));
+}
+
+namespace {
+
+// A 32³ grid, a wall z = 16 whose surfaces face +z (the back seen by light going +z), eye
+// samples spread through the grid.
+struct WallScene {
+    OcclusionGrid grid{makeGeometry({32, 32, 32}, Vec3(0.f), 1.f)};
+    EyeSamples samples;
+    OcclusionTree tree;
+
+    explicit WallScene(bool wall, IVec3 holeLo = IVec3(0), IVec3 holeHi = IVec3(0)) {
+        if (wall)
+            for (int y = 0; y < 32; ++y)
+                for (int x = 0; x < 32; ++x)
+                    if (!(x >= holeLo.x && x < holeHi.x && y >= holeLo.y && y < holeHi.y)) setCounts(grid, x, y, 16, {{kPosZ, 16}});
+        std::mt19937 rng(5);
+        samples = makeSamples(grid.geometry, randomPoints(rng, grid.geometry.dims, 40000));
+        ThreadPool pool(2);
+        tree = buildOcclusionTree(grid, samples, pool);
+    }
+};
+
+float distanceToAxis(const Cylinder& c, Vec3 p) {
+    Vec3 d = p - c.origin;
+    return glm::length(d - glm::dot(d, c.dir) * c.dir);
+}
+
+}  // namespace
+
+TEST(OcclusionTreeTraversal, SolidWallStopsEverythingBehindIt) {
+    WallScene scene(true), open(false);
+    TraversalScratch scratch;
+    for (Vec3 dir : {Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, -0.2f, 1.f)), glm::normalize(Vec3(-0.6f, 0.5f, 1.f))}) {
+        Cylinder cyl;
+        cyl.origin = Vec3(16.f, 15.f, 2.f);
+        cyl.dir = dir;
+        cyl.radius = 3.f;
+        cyl.length = 29.f / dir.z;
+        TraversalStats st, stOpen, stToWall;
+        std::vector<float> v = traverse(scene.tree, scene.samples, cyl, scratch, &st);
+        Comparison cmp = compare(v, bruteForceVisibility(scene.grid, scene.samples, scene.tree.sampleCount, cyl));
+        EXPECT_EQ(cmp.setMismatch + cmp.valueMismatch, 0u);
+        size_t front = 0, behind = 0, behindInside = 0;
+        for (uint32_t i = 0; i < scene.tree.sampleCount; ++i) {
+            Vec3 p = scene.samples.position[i];
+            bool inside = distanceToAxis(cyl, p) < cyl.radius;
+            if (p.z < 16.f) front += inside && v[i] == 1.f;
+            if (p.z >= 17.f) behind += v[i] > 0.f, behindInside += inside;
+        }
+        EXPECT_GT(front, 100u);
+        EXPECT_GT(behindInside, 100u);
+        EXPECT_EQ(behind, 0u) << "samples lit behind the wall";
+        // Early exit: the nodes behind the wall are skipped once the wall's cells are full.
+        // kd order is not slice order (a near child's part behind the wall can come before
+        // a far child's part of the wall), so some nodes behind it are still visited.
+        traverse(open.tree, open.samples, cyl, scratch, &stOpen);
+        Cylinder toWall = cyl;
+        toWall.length = 15.f / dir.z;
+        traverse(scene.tree, scene.samples, toWall, scratch, &stToWall);
+        EXPECT_GT(st.pruned, 0u);
+        EXPECT_LT(double(st.nodes), 0.85 * double(stOpen.nodes));
+        EXPECT_LT(st.nodes, stToWall.nodes * 3 / 2);
+        std::printf("  dir (%.2f %.2f %.2f): nodes %llu (no wall %llu, stopping at the wall %llu), pruned %llu\n",
+                    double(dir.x), double(dir.y), double(dir.z), (unsigned long long)st.nodes,
+                    (unsigned long long)stOpen.nodes, (unsigned long long)stToWall.nodes, (unsigned long long)st.pruned);
+    }
+}
+
+TEST(OcclusionTreeTraversal, WallWithHoleLetsLightOnlyThroughTheHole) {
+    const IVec3 holeLo(10, 12, 0), holeHi(18, 20, 0);
+    WallScene scene(true, holeLo, holeHi);
+    TraversalScratch scratch;
+    for (Vec3 dir : {Vec3(0, 0, 1), glm::normalize(Vec3(0.25f, -0.15f, 1.f))}) {
+        Cylinder cyl;
+        cyl.origin = Vec3(14.3f, 15.6f, 3.f) - dir * 13.f / dir.z + Vec3(0, 0, 13.f);
+        cyl.origin.z = 3.f;
+        cyl.dir = dir;
+        cyl.radius = 7.f;
+        cyl.length = 28.f / dir.z;
+        std::vector<float> v = traverse(scene.tree, scene.samples, cyl, scratch);
+        Comparison cmp = compare(v, bruteForceVisibility(scene.grid, scene.samples, scene.tree.sampleCount, cyl));
+        EXPECT_EQ(cmp.setMismatch + cmp.valueMismatch, 0u);
+        size_t lit = 0, fullyLit = 0, shadowed = 0;
+        for (uint32_t i = 0; i < scene.tree.sampleCount; ++i) {
+            Vec3 p = scene.samples.position[i];
+            if (p.z < 17.f || distanceToAxis(cyl, p) >= cyl.radius) continue;
+            // Where the line from the sample back along ω crosses the wall's mid-plane.
+            Vec3 q = p - dir * (p.z - 16.5f) / dir.z;
+            auto inHole = [&](float margin) {
+                return q.x > holeLo.x + margin && q.x < holeHi.x - margin && q.y > holeLo.y + margin && q.y < holeHi.y - margin;
+            };
+            if (v[i] > 0.f) {
+                ++lit;
+                EXPECT_TRUE(inHole(-2.f)) << "lit at (" << q.x << ", " << q.y << ")";
+            } else {
+                ++shadowed;
+            }
+            if (inHole(2.f)) {
+                EXPECT_EQ(v[i], 1.f);
+                ++fullyLit;
+            }
+        }
+        EXPECT_GT(fullyLit, 50u);
+        EXPECT_GT(shadowed, 200u);
+        EXPECT_GT(lit, fullyLit);
+    }
+}
+
+TEST(OcclusionTreeTraversal, LitSurfaceDoesNotShadowItself) {
+    // A floor z = 10 facing +z, eye samples on it (and in the layer above its voxels).
+    OcclusionGrid grid(makeGeometry({32, 32, 32}, Vec3(0.f), 1.f));
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) setCounts(grid, x, y, 10, {{kPosZ, 16}});
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u01(0.f, 32.f);
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 20000; ++i) pts.push_back(Vec3(u01(rng), u01(rng), i % 2 ? 10.5f : 10.99f));
+    EyeSamples samples = makeSamples(grid.geometry, pts);
+    ThreadPool pool(2);
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+    TraversalScratch scratch;
+    std::vector<Cylinder> cylinders;
+    // From points above the floor, down onto it.
+    for (Vec3 dir : {Vec3(0, 0, -1), glm::normalize(Vec3(0.5f, 0.3f, -1.f)), glm::normalize(Vec3(-2.f, 0.4f, -1.f))}) {
+        Cylinder c;
+        c.origin = Vec3(16.f, 16.f, 10.75f) - dir * 12.f;
+        c.dir = dir;
+        c.radius = 4.f;
+        c.length = 40.f;
+        cylinders.push_back(c);
+    }
+    // From the floor itself, leaving it (n_o = its normal), grazing and steep.
+    for (Vec3 dir : {glm::normalize(Vec3(1.f, 0.2f, 0.3f)), glm::normalize(Vec3(-0.3f, 1.f, 0.8f)), Vec3(0, 0, 1)}) {
+        Cylinder c;
+        c.origin = Vec3(6.f, 5.f, 10.75f);
+        c.dir = dir;
+        c.radius = 3.f;
+        c.length = 40.f;
+        c.originNormal = Vec3(0, 0, 1);
+        cylinders.push_back(c);
+    }
+    for (const Cylinder& c : cylinders) {
+        std::vector<float> v = traverse(tree, samples, c, scratch);
+        std::vector<float> brute = bruteForceVisibility(grid, samples, tree.sampleCount, c);
+        size_t reached = 0;
+        for (uint32_t i = 0; i < tree.sampleCount; ++i) {
+            if (brute[i] > 0.f || v[i] > 0.f) ++reached;
+            EXPECT_EQ(v[i], brute[i]);
+            if (brute[i] > 0.f) {
+                EXPECT_EQ(v[i], 1.f);
+            }
+        }
+        // Reached = every sample whose voxel the cylinder meets, all with V = 1.
+        size_t met = 0;
+        TraversalStats st;
+        traverseCylinder(tree, samples, c, scratch, [&](uint32_t, float) {}, &st);
+        met = st.samplesReached;
+        EXPECT_EQ(reached, met);
+        EXPECT_GT(reached, 20u);
+    }
+}
+
+TEST(OcclusionTreeTraversal, ThinDoubleSidedSlabDoesNotShadowItsLitSide) {
+    // A thin double-sided slab in voxel layer z = 12 (x, y in [6, 26)): ambiguous voxels with
+    // both z sides full; a floor z = 3 below it. Eye samples on the slab's top and the floor.
+    OcclusionGrid grid(makeGeometry({32, 32, 32}, Vec3(0.f), 1.f));
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            setCounts(grid, x, y, 3, {{kPosZ, 16}});
+            if (x >= 6 && x < 26 && y >= 6 && y < 26) setCounts(grid, x, y, 12, {{kPosZ, 16}, {kNegZ, 16}});
+        }
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 20000; ++i) {
+        float x = u01(rng) * 32.f, y = u01(rng) * 32.f;
+        bool onSlab = x >= 6 && x < 26 && y >= 6 && y < 26 && i % 2;
+        pts.push_back(Vec3(x, y, onSlab ? 12.6f : 3.5f));
+    }
+    EyeSamples samples = makeSamples(grid.geometry, pts);
+    ThreadPool pool(2);
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+    ASSERT_TRUE(grid.ambiguous(grid.geometry.index(10, 10, 12)));
+    TraversalScratch scratch;
+    for (Vec3 dir : {Vec3(0, 0, -1), glm::normalize(Vec3(0.4f, 0.3f, -1.f)), glm::normalize(Vec3(1.f, 0.2f, -0.8f))}) {
+        Cylinder c;
+        c.origin = Vec3(16.f, 16.f, 12.6f) - dir * 10.f / -dir.z;
+        c.dir = dir;
+        c.radius = 5.f;
+        c.length = 40.f;
+        const bool majorAxisIsZ = std::abs(dir.z) > std::max(std::abs(dir.x), std::abs(dir.y));
+        std::vector<float> v = traverse(tree, samples, c, scratch);
+        Comparison cmp = compare(v, bruteForceVisibility(grid, samples, tree.sampleCount, c));
+        EXPECT_EQ(cmp.setMismatch + cmp.valueMismatch, 0u);
+        size_t top = 0, under = 0;
+        for (uint32_t i = 0; i < tree.sampleCount; ++i) {
+            Vec3 p = samples.position[i];
+            if (distanceToAxis(c, p) >= c.radius) continue;
+            if (p.z > 12.f) {
+                ++top;
+                EXPECT_EQ(v[i], 1.f) << "slab top at (" << p.x << ", " << p.y << ") dir " << dir.x << " " << dir.z;
+            } else {
+                // Floor samples whose line back to the light crosses the slab well inside.
+                Vec3 q = p - dir * (p.z - 12.5f) / dir.z;
+                if (q.x > 8 && q.x < 24 && q.y > 8 && q.y < 24) {
+                    ++under;
+                    // With N = z each slab voxel fills its cell. At a grazing angle (N = x) a
+                    // voxel's top projects to |ω_z/ω_x| = 0.8 of a cell but counts whole in
+                    // the cell of its centre: cells get one voxel (0.8) or two (full).
+                    if (majorAxisIsZ) {
+                        EXPECT_EQ(v[i], 0.f) << "floor under the slab lit";
+                    } else {
+                        EXPECT_LE(v[i], 1.f - 0.8f + 1e-6f) << "floor under the slab lit";
+                    }
+                }
+            }
+        }
+        EXPECT_GT(top, 50u);
+        EXPECT_GT(under, 50u);
+    }
+}
+
