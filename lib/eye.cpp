@@ -74,3 +74,95 @@ void EyeSamples::permute(const std::vector<uint32_t>& order) {
 }
 
 }  // namespace rs
+
+// -- The eye pass --------------------------------------------------------------------------
+
+#include "accel.h"
+#include "bsdf.h"
+#include "camera.h"
+#include "log.h"
+#include "parallel.h"
+#include "sampling.h"
+
+namespace rs {
+
+namespace {
+
+// A material that reflects nothing (the black base of an area light) receives no photon
+// energy: no eye sample is stored for it.
+bool reflectsNothing(const Material& m) {
+    return m.kind == MaterialKind::Lambert && m.baseColorTexture < 0 && isBlack(m.baseColor);
+}
+
+}  // namespace
+
+EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& camera, const EyePassSettings& st,
+                     ThreadPool& pool, Reporter& reporter) {
+    EyePass out;
+    out.film = Film(st.width, st.height);
+    CameraRays rays(camera, st.width, st.height);
+    const float invSpp = 1.f / float(st.spp);
+    std::vector<EyeSamples> rows(st.height);
+
+    reporter.begin("eye pass", st.height, "rows");
+    pool.parallelFor(st.height, 4, [&](int64_t y0, int64_t y1, int) {
+        for (int64_t y = y0; y < y1; ++y) {
+            EyeSamples& row = rows[y];
+            row.reserve(size_t(st.width) * st.spp);
+            for (int x = 0; x < st.width; ++x) {
+                uint32_t pixel = uint32_t(y * st.width + x);
+                uint64_t scramble = hashKey(st.seed, Stage::Camera, pixel);
+                for (int s = 0; s < st.spp; ++s) {
+                    Vec2 jitter = sobol2D(uint32_t(s), scramble);
+                    Sampler sampler(st.seed, Stage::Eye, (uint64_t(pixel) << 24) ^ uint64_t(s));
+                    Vec3 o = rays.origin(), d = rays.direction(Vec2(float(x), float(y)) + jitter);
+                    Vec3 weight(invSpp);
+
+                    // Follow the specular chain to the first non-specular surface.
+                    for (int depth = 0; depth <= st.maxSpecularDepth; ++depth) {
+                        SurfacePoint sp;
+                        float t;
+                        if (!accel.intersect(o, d, kInf, sp, t)) break;
+                        const Material& m = scene.materials[sp.material];
+                        if (m.isEmissive() && sp.frontFace) out.film.layers[kEmission][pixel] += weight * m.emission;
+                        Vec3 wo = -d;
+                        Bsdf bsdf(scene, sp, wo);
+                        if (!bsdf.isDelta()) {
+                            out.film.albedo[pixel] += invSpp * bsdf.albedo();
+                            out.film.normal[pixel] += invSpp * bsdf.shadingNormal();
+                            if (reflectsNothing(m)) break;
+                            row.position.push_back(sp.p);
+                            row.normal.push_back(encodeUnit(bsdf.shadingNormal()));
+                            row.geomNormal.push_back(encodeUnit(glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng));
+                            row.toViewer.push_back(encodeUnit(wo));
+                            row.material.push_back(sp.material);
+                            row.uv.push_back(sp.uv);
+                            row.pixel.push_back(pixel);
+                            row.weight.push_back(weight);
+                            break;
+                        }
+                        float uLobe = sampler.get1D();
+                        BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
+                        if (bs.pdf <= 0.f || isBlack(bs.weight)) break;
+                        weight *= bs.weight;
+                        o = offsetRayOrigin(sp, bs.wi);
+                        d = bs.wi;
+                    }
+                }
+            }
+            reporter.advance(1);
+        }
+    });
+    reporter.end();
+
+    size_t total = 0;
+    for (const EyeSamples& r : rows) total += r.size();
+    out.samples.reserve(total);
+    for (EyeSamples& r : rows) {
+        out.samples.append(r);
+        r = EyeSamples();
+    }
+    return out;
+}
+
+}  // namespace rs

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "film.h"
 #include "math.h"
 
 namespace rs {
@@ -36,5 +37,27 @@ struct EyeSamples {
     // Reorders every array: new sample i is old sample order[i].
     void permute(const std::vector<uint32_t>& order);
 };
+
+
+class RayAccel;
+struct Camera;
+struct Scene;
+class ThreadPool;
+class Reporter;
+
+struct EyePassSettings {
+    int width = 500, height = 500;
+    int spp = 4;              // S: stratified camera samples a pixel (paper: 500×500×4)
+    int maxSpecularDepth = 16;  // longest specular chain followed
+    uint64_t seed = 0;
+};
+
+struct EyePass {
+    EyeSamples samples;  // in pixel order, then sample order
+    Film film;           // emission layer (emitters seen through specular chains), albedo, normal
+};
+
+EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& camera, const EyePassSettings& settings,
+                     ThreadPool& pool, Reporter& reporter);
 
 }  // namespace rs

@@ -103,6 +103,7 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
     size_t ei = choose(uChoice, prob);
     const Entry& e = entries_[ei];
     s.light = uint32_t(ei);
+    s.choiceProb = prob;
     if (!(prob > 0.f)) return s;
     if (e.area) {
         // Uniform point on the triangle, cosine-weighted direction around its front normal.
@@ -110,6 +111,7 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
         Vec2 b = sampleUniformTriangle(uPos);
         Vec3 n = scene_.geometricNormal(e.index);
         s.origin = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        s.normal = n;
         Vec3 local = sampleCosineHemisphere(uDir);
         s.dir = Frame(n).toWorld(local);
         float area = scene_.triangleArea(e.index);

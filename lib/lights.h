@@ -21,6 +21,8 @@ struct EmissionSample {
     Vec3 flux{0.f};              // Le·cos / (pdfPos·pdfDir·pChoice): the photon's flux
     float pdfDir = 0.f;          // solid-angle pdf of dir at origin (0: delta / collimated)
     float pdfChoicePos = 0.f;    // pChoice · pdf of the position (per area; 1 for a point)
+    float choiceProb = 0.f;      // probability of having chosen this light
+    Vec3 normal{0.f};            // the emitting surface's normal (area lights), else 0
     bool collimated = false;     // directional light: density is per perpendicular area
     uint32_t light = 0;
 };

@@ -1,0 +1,158 @@
+// The eye pass: where eye samples land, what they weigh, what is seen directly, determinism.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "accel.h"
+#include "bsdf.h"
+#include "eye.h"
+#include "log.h"
+#include "parallel.h"
+#include "sampling.h"
+#include "test_scenes.h"
+
+using namespace rs;
+using namespace rs::test;
+
+namespace {
+
+Camera lookingDownZ(Vec3 position, float yfov = 0.5f) {
+    Camera c;
+    c.position = position;
+    c.yfov = yfov;
+    return c;
+}
+
+}  // namespace
+
+TEST(UnitEncoding, RoundTripWithinAHundredthOfADegree) {
+    Sampler s(1, Stage::Test, 0);
+    float worst = 0.f;
+    for (int i = 0; i < 100000; ++i) {
+        Vec3 n = sampleUniformSphere(s.get2D());
+        Vec3 m = decodeUnit(encodeUnit(n));  // angle by atan2: acos of a float dot is too coarse
+        float angle = std::atan2(glm::length(glm::cross(n, m)), glm::dot(n, m));
+        worst = std::max(worst, angle);
+    }
+    EXPECT_LT(worst * 180.f / kPi, 0.01f);
+    for (Vec3 axis : {Vec3(1, 0, 0), Vec3(0, -1, 0), Vec3(0, 0, -1)})
+        EXPECT_GT(glm::dot(axis, decodeUnit(encodeUnit(axis))), 0.99999f);
+}
+
+// A diffuse wall filling the view: S samples a pixel, each of weight 1/S, on the wall,
+// facing the camera.
+TEST(EyePass, DiffuseWallGetsSSamplesPerPixelOnItsSurface) {
+    Scene s;
+    uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
+    addQuad(s, {-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}, m);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    ThreadPool pool(2);
+    EyePassSettings st;
+    st.width = 16;
+    st.height = 12;
+    st.spp = 4;
+    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
+    ASSERT_EQ(eye.samples.size(), size_t(16 * 12 * 4));
+    std::vector<int> perPixel(16 * 12, 0);
+    for (size_t i = 0; i < eye.samples.size(); ++i) {
+        EXPECT_NEAR(eye.samples.position[i].z, -1.f, 1e-5f);
+        EXPECT_NEAR(eye.samples.weight[i].x, 0.25f, 1e-7f);
+        EXPECT_GT(decodeUnit(eye.samples.normal[i]).z, 0.9999f);
+        Vec3 toViewer = glm::normalize(Vec3(0, 0, 2) - eye.samples.position[i]);
+        EXPECT_GT(glm::dot(toViewer, decodeUnit(eye.samples.toViewer[i])), 0.99999f);
+        perPixel[eye.samples.pixel[i]]++;
+    }
+    for (int c : perPixel) EXPECT_EQ(c, 4);
+}
+
+// Samples are stratified in the pixel: the four samples of a pixel project to four
+// different quadrants.
+TEST(EyePass, SamplesOfAPixelAreStratified) {
+    Scene s;
+    uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
+    addQuad(s, {-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}, m);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    ThreadPool pool(1);
+    EyePassSettings st;
+    st.width = st.height = 8;
+    st.spp = 4;
+    Camera cam = lookingDownZ({0, 0, 2}, 0.5f);
+    EyePass eye = traceEyePass(s, accel, cam, st, pool, silentReporter());
+    float tanHalf = std::tan(0.25f);
+    for (size_t p = 0; p < 64; ++p) {
+        int quadrants = 0;
+        for (int k = 0; k < 4; ++k) {
+            Vec3 q = eye.samples.position[p * 4 + k];
+            // Back to raster: x = (q.x/3/tanHalf + 1)/2·8, y likewise (flipped).
+            float rx = (q.x / 3.f / tanHalf + 1.f) * 4.f, ry = (1.f - q.y / 3.f / tanHalf) * 4.f;
+            int qx = int((rx - std::floor(rx)) * 2.f), qy = int((ry - std::floor(ry)) * 2.f);
+            quadrants |= 1 << (qy * 2 + qx);
+        }
+        EXPECT_EQ(quadrants, 15) << "pixel " << p;
+    }
+}
+
+// Through a glass slab: each sample either reflects (sees nothing: no sample) or transmits to
+// the wall behind; transmitted samples carry weight 1/S (η² in, 1/η² out), and the fraction
+// that arrives is (1 − R)/(1 + R).
+TEST(EyePass, GlassSlabPassesTheFresnelFractionWithUnitWeight) {
+    Scene s;
+    uint32_t glass = addMaterial(s, MaterialKind::Glass, Vec3(1.f));
+    uint32_t wall = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
+    addBox(s, {-20, -20, -0.3f}, {20, 20, -0.1f}, glass);
+    addQuad(s, {-50, -50, -3}, {50, -50, -3}, {50, 50, -3}, {-50, 50, -3}, wall);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    ThreadPool pool(2);
+    EyePassSettings st;
+    st.width = st.height = 64;
+    st.spp = 4;
+    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}, 0.05f), st, pool, silentReporter());
+    double weight = 0;
+    for (size_t i = 0; i < eye.samples.size(); ++i) {
+        EXPECT_NEAR(eye.samples.position[i].z, -3.f, 1e-4f);
+        EXPECT_NEAR(eye.samples.weight[i].x, 0.25f, 1e-5f);
+        weight += eye.samples.weight[i].x;
+    }
+    float R = fresnelDielectric(1.f, 1.5f);
+    EXPECT_NEAR(weight / (64 * 64), (1 - R) / (1 + R), 0.01);
+}
+
+// An emitter seen directly lands in the emission layer with its radiance, and a black
+// emitter base stores no eye sample.
+TEST(EyePass, DirectlySeenEmitterGoesToTheEmissionLayer) {
+    Scene s;
+    uint32_t light = addMaterial(s, MaterialKind::Lambert, Vec3(0.f), Vec3(3.f, 2.f, 1.f));
+    addQuad(s, {-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}, light);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    ThreadPool pool(1);
+    EyePassSettings st;
+    st.width = st.height = 4;
+    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
+    EXPECT_EQ(eye.samples.size(), 0u);
+    for (size_t p = 0; p < 16; ++p) {
+        Vec3 e = eye.film.layers[kEmission][p];
+        EXPECT_NEAR(e.x, 3.f, 1e-5f);
+        EXPECT_NEAR(e.y, 2.f, 1e-5f);
+        EXPECT_NEAR(e.z, 1.f, 1e-5f);
+    }
+}
+
+TEST(EyePass, ThreadCountDoesNotChangeSamples) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
+    RayAccel accel(scene, 2);
+    EyePassSettings st;
+    st.width = st.height = 48;
+    ThreadPool one(1), two(2);
+    EyePass a = traceEyePass(scene, accel, scene.camera(), st, one, silentReporter());
+    EyePass b = traceEyePass(scene, accel, scene.camera(), st, two, silentReporter());
+    ASSERT_EQ(a.samples.size(), b.samples.size());
+    EXPECT_EQ(0, std::memcmp(a.samples.position.data(), b.samples.position.data(), a.samples.size() * sizeof(Vec3)));
+    EXPECT_EQ(a.samples.pixel, b.samples.pixel);
+    EXPECT_EQ(0, std::memcmp(a.samples.weight.data(), b.samples.weight.data(), a.samples.size() * sizeof(Vec3)));
+}
