@@ -1,6 +1,7 @@
 #include "config.h"
 
 #include <cmath>
+#include <filesystem>
 
 #include "error.h"
 
@@ -8,16 +9,18 @@ namespace rs {
 
 const char* methodName(Method m) {
     switch (m) {
+        case Method::Splat: return "splat";
+        case Method::SplatNoVis: return "splat-novis";
         case Method::Path: return "path";
     }
     return "?";
 }
 
 Method parseMethod(const std::string& name) {
+    if (name == "splat") return Method::Splat;
+    if (name == "splat-novis") return Method::SplatNoVis;
     if (name == "path") return Method::Path;
-    if (name == "splat" || name == "splat-novis")
-        throw Error(ErrorKind::Config, "--method " + name + ": not built yet (available: path)");
-    throw Error(ErrorKind::Config, "--method " + name + ": unknown method (available: path)");
+    throw Error(ErrorKind::Config, "--method " + name + ": unknown method (splat, splat-novis, path)");
 }
 
 static void requireRange(const char* flag, double v, double lo, double hi) {
@@ -32,14 +35,45 @@ void RenderConfig::validate() const {
     requireRange("--width", width, 0, 16384);
     requireRange("--height", height, 0, 16384);
     if (width == 0 && height == 0) throw Error(ErrorKind::Config, "--width and --height cannot both be 0");
-    requireRange("--spp", spp, 1, 1 << 20);
+    requireRange("--spp", spp, 0, 1 << 20);
+    requireRange("--photons", double(photons), 1, 1e9);
+    double splitSum = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        requireRange("--split", split[c], 0, 1e6);
+        requireRange("--kernel-photons", kernelPhotons[c], 0.1, 1e6);
+        requireRange("--min-radius", minRadius[c], 0.01, 4096);
+        requireRange("--max-radius", maxRadius[c], minRadius[c], 4096);
+        splitSum += split[c];
+    }
+    if (!(splitSum > 0.0)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
     requireRange("--max-depth", maxDepth, 1, 1024);
     requireRange("--threads", threads, 0, 1024);
     requireRange("--time-limit", timeLimit, 0, 1e7);
     requireRange("--exposure", exposure, -50, 50);
+    validateGrid();
     if (output.empty()) throw Error(ErrorKind::Config, "no output file: give -o FILE.exr");
+    // Refuse before rendering, not after: every output's directory must exist.
+    for (const std::string* f : {&output, &png, &statsJson}) {
+        if (f->empty()) continue;
+        std::filesystem::path dir = std::filesystem::path(*f).parent_path();
+        std::error_code ec;
+        if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+            throw Error(ErrorKind::Io, *f + ": directory " + dir.string() + " does not exist");
+    }
     double pixels = double(width ? width : height) * double(height ? height : width);
-    if (pixels * spp > 1e12) throw Error(ErrorKind::Config, "--width × --height × --spp is absurdly large");
+    if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "--width × --height × --spp is absurdly large");
+}
+
+void RenderConfig::validateGrid() const {
+    requireRange("--grid", grid, 1, 4096);
+    if (voxelizer != "auto" && voxelizer != "gpu" && voxelizer != "cpu")
+        throw Error(ErrorKind::Config, "--voxelizer " + voxelizer + ": unknown voxelizer (auto, gpu, cpu)");
+    if (!vdb.empty()) {
+        std::filesystem::path dir = std::filesystem::path(vdb).parent_path();
+        std::error_code ec;
+        if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+            throw Error(ErrorKind::Io, vdb + ": directory " + dir.string() + " does not exist");
+    }
 }
 
 void RenderConfig::resolution(float aspect, int& w, int& h) const {
@@ -52,13 +86,28 @@ void RenderConfig::resolution(float aspect, int& w, int& h) const {
         throw Error(ErrorKind::Config, "resolution " + std::to_string(w) + "x" + std::to_string(h) + " from the camera's aspect is too large");
 }
 
+static std::string triple(const float v[3]) {
+    char b[96];
+    std::snprintf(b, sizeof b, "%g,%g,%g", v[0], v[1], v[2]);
+    return b;
+}
+
 ImageAttributes RenderConfig::attributes() const {
-    return {{"method", methodName(method)},
-            {"spp", std::to_string(spp)},
+    ImageAttributes a = {{"method", methodName(method)},
+            {"spp", std::to_string(samplesPerPixel())},
             {"seed", std::to_string(seed)},
             {"maxDepth", std::to_string(maxDepth)},
             {"camera", camera.empty() ? "(first)" : camera},
-            {"timeLimit", std::to_string(timeLimit)}};
+            {"timeLimit", std::to_string(timeLimit)},
+            {"grid", std::to_string(grid)},
+            {"voxelizer", voxelizer}};
+    if (splats()) {
+        a["photons"] = std::to_string(photons);
+        a["split"] = triple(split);
+        a["kernelPhotons"] = triple(kernelPhotons);
+        a["radiusVoxels"] = triple(minRadius) + "/" + triple(maxRadius);
+    }
+    return a;
 }
 
 }  // namespace rs

@@ -9,7 +9,9 @@
 
 namespace rs {
 
-enum class Method { Path };
+// splat: photon ray splatting with visibility (the paper); splat-novis: the same without the
+// occlusion mask (V ≡ 1, the paper's Fig. 4b); path: the reference path tracer.
+enum class Method { Splat, SplatNoVis, Path };
 const char* methodName(Method m);
 Method parseMethod(const std::string& name);  // throws Error(Config)
 
@@ -20,17 +22,35 @@ struct RenderConfig {
     std::string statsJson;  // optional
     std::string camera;     // name; empty = first in the file
 
-    Method method = Method::Path;
+    Method method = Method::Splat;
     int width = 500;   // 0: from height and the camera's aspect
     int height = 0;    // 0: from width and the camera's aspect
-    int spp = 16;      // samples per pixel (per pass with --time-limit)
+    int spp = 0;       // samples per pixel; 0: the method's default (splat 4, path 16)
     int maxDepth = 32;
     uint64_t seed = 0;
     int threads = 0;         // 0: all hardware threads
     double timeLimit = 0.0;  // seconds; > 0: render passes until the time is up
     float exposure = 0.f;    // PNG preview, stops
 
+    // Photons (DESIGN §8): total M, the split direct/indirect/caustic, the photons wanted
+    // under a kernel (k) and the radius clamps in voxels, per class.
+    int64_t photons = 100000;
+    float split[3] = {0.2f, 0.5f, 0.3f};
+    float kernelPhotons[3] = {16.f, 64.f, 16.f};
+    float minRadius[3] = {1.f, 2.f, 1.f};
+    float maxRadius[3] = {16.f, 48.f, 16.f};
+
+    // Occlusion grid (DESIGN §5–6).
+    int grid = 192;                  // voxels along the scene's longest axis, 1..4096
+    std::string voxelizer = "auto";  // auto (GPU, CPU when EGL is unusable), gpu, cpu
+    std::string vdb;                 // optional: write the grid used as .vdb
+    std::string cacheDir;            // optional: voxel cache directory (<key>.vdb files)
+
+    int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? 16 : 4; }
+    bool splats() const { return method != Method::Path; }
     void validate() const;
+    // The grid settings only (validate() includes them): for commands without an image.
+    void validateGrid() const;
     // Width and height for a camera of aspect `aspect` (0: unknown, taken as 1).
     void resolution(float aspect, int& w, int& h) const;
     ImageAttributes attributes() const;  // for the EXR header

@@ -15,6 +15,7 @@ int main() {
     rs::Scene scene = rs::loadScene(path, rs::silentReporter());
     rs::RenderConfig cfg;
     cfg.output = "unused.exr";
+    cfg.method = rs::Method::Path;
     cfg.width = 500;
     cfg.spp = 16;
     std::vector<double> rates;

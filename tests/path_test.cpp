@@ -127,6 +127,7 @@ TEST(PathTracer, ThreadCountDoesNotChangePixels) {
     Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
     RenderConfig cfg;
     cfg.output = "unused.exr";
+    cfg.method = Method::Path;
     cfg.width = 40;
     cfg.spp = 4;
     cfg.threads = 1;

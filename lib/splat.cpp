@@ -1,0 +1,116 @@
+// The splat stage. Photon rays are processed in chunks on the thread pool; each thread
+// accumulates into its own fixed-point buffer (2^-32 resolution, 2^31 range per pixel and
+// channel); the buffers are summed at the end. Integer addition is associative, so the image
+// is bit-identical whatever the thread count or scheduling (STYLE rule 6).
+#include "splat.h"
+
+#include <mutex>
+
+#include "bsdf.h"
+#include "log.h"
+#include "parallel.h"
+#include "scene.h"
+
+namespace rs {
+
+namespace {
+
+constexpr double kFixedScale = 4294967296.0;  // 2^32
+constexpr int kSplatLayers = 3;               // direct, indirect, caustic = photon classes
+static_assert(int(kPhotonDirect) == int(kDirect) && int(kPhotonIndirect) == int(kIndirect) &&
+                  int(kPhotonCaustic) == int(kCaustic),
+              "photon classes index the film's layers");
+
+inline int64_t toFixed(float v) {
+    double x = double(v) * kFixedScale;
+    return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
+}
+
+}  // namespace
+
+void splatPhotons(const Scene& scene, const OcclusionTree& tree, const EyeSamples& samples, const PhotonMap& photons,
+                  Film& film, ThreadPool& pool, Reporter& reporter, SplatStats* statsOut) {
+    const GridGeometry& g = tree.geometry;
+    const size_t pixels = film.pixelCount();
+    const int threads = pool.size();
+    std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
+    std::vector<TraversalScratch> scratch(threads);
+    std::vector<SplatStats> stats(threads);
+    const int64_t n = int64_t(photons.rays.size());
+
+    reporter.begin("splatting", n, "photons");
+    pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
+        std::vector<int64_t>& buf = acc[thread];
+        if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
+        SplatStats& st = stats[thread];
+        for (int64_t p = b; p < e; ++p) {
+            const PhotonRay& ray = photons.rays[p];
+            const float h = ray.radius, h2 = h * h;
+            const Vec3 o = ray.origin, w = ray.dir;
+            Cylinder cyl;
+            cyl.origin = g.voxelFromWorld(o);
+            cyl.dir = w;
+            cyl.radius = h / g.voxelSize;
+            cyl.length = (ray.length + h) / g.voxelSize;  // a little past the hit (≈h)
+            cyl.originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
+            int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
+
+            traverseCylinder(tree, samples, cyl, scratch[thread], [&](uint32_t i, float visibility) {
+                // Only samples in front of the ray's origin, inside the kernel, facing the photon.
+                Vec3 y = samples.position[i];
+                Vec3 oy = y - o;
+                float t = glm::dot(oy, w);
+                if (t <= 0.f) return;
+                float d2 = glm::dot(oy, oy) - t * t;
+                if (d2 >= h2) return;
+                Vec3 n = decodeUnit(samples.normal[i]);
+                float cosTheta = glm::dot(n, w);
+                if (cosTheta >= 0.f) return;
+                Vec3 ng = decodeUnit(samples.geomNormal[i]);
+                if (glm::dot(ng, w) >= 0.f) return;
+
+                // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V.
+                SurfacePoint sp;
+                sp.p = y;
+                sp.ng = ng;
+                sp.ns = n;
+                sp.uv = samples.uv[i];
+                sp.material = samples.material[i];
+                Vec3 wo = decodeUnit(samples.toViewer[i]);
+                Bsdf bsdf(scene, sp, wo);
+                Vec3 f = bsdf.eval(wo, -w);
+                float scale = biweightKernel(std::max(d2, 0.f), h2) * -cosTheta * visibility;
+                Vec3 c = samples.weight[i] * f * ray.flux * scale;
+                if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
+                int64_t* px = &layer[size_t(samples.pixel[i]) * 3];
+                px[0] += toFixed(c.x);
+                px[1] += toFixed(c.y);
+                px[2] += toFixed(c.z);
+                ++st.contributions;
+            }, &st.traversal);
+        }
+        reporter.advance(e - b);
+    });
+    reporter.end();
+
+    // Sum the threads' buffers (integers: any order gives the same sum) into the film.
+    for (int l = 0; l < kSplatLayers; ++l) {
+        for (size_t px = 0; px < pixels; ++px) {
+            int64_t sum[3] = {0, 0, 0};
+            for (const std::vector<int64_t>& buf : acc) {
+                if (buf.empty()) continue;
+                for (int c = 0; c < 3; ++c) sum[c] += buf[(size_t(l) * pixels + px) * 3 + c];
+            }
+            film.layers[l][px] += Vec3(float(double(sum[0]) / kFixedScale), float(double(sum[1]) / kFixedScale),
+                                       float(double(sum[2]) / kFixedScale));
+        }
+    }
+    if (statsOut) {
+        for (const SplatStats& s : stats) {
+            statsOut->traversal.add(s.traversal);
+            statsOut->contributions += s.contributions;
+        }
+    }
+}
+
+}  // namespace rs
