@@ -195,6 +195,7 @@ const char* kTopHelp =
     "commands:\n"
     "  render SCENE -o OUT.exr   render a .gltf/.glb scene to OpenEXR (and a PNG preview)\n"
     "  info SCENE                triangles, materials, lights, emitted power, camera, bounds\n"
+    "  compare A.exr REF.exr     relative MSE and RMSE of A against a reference, per layer\n"
     "  voxelize SCENE -o G.vdb   voxelize the scene into an occlusion grid (OpenVDB; opens in Blender)\n"
     "\n"
     "Run 'raysplat <command> --help' for the options of a command.\n";
@@ -377,6 +378,30 @@ int cmdVoxelize(int argc, char** argv) {
     return 0;
 }
 
+int cmdCompare(int argc, char** argv) {
+    Command cmd("raysplat compare IMAGE.exr REFERENCE.exr",
+                "Compares two EXRs of the same size: relative MSE (mean over pixels and channels of\n"
+                "(a - r)^2 / (r^2 + 0.01)) and RMSE, for the beauty image and each layer both files have.");
+    bool help;
+    std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
+    if (help) return 0;
+    if (pos.size() != 2) throw Error(ErrorKind::Config, "compare needs IMAGE.exr and REFERENCE.exr");
+    ExrImage a = readExr(pos[0]), r = readExr(pos[1]);
+    if (a.width != r.width || a.height != r.height)
+        throw Error(ErrorKind::Config, fmt("%s is %dx%d but %s is %dx%d", pos[0].c_str(), a.width, a.height, pos[1].c_str(),
+                                           r.width, r.height));
+    std::printf("%-10s %12s %12s\n", "layer", "rel. MSE", "RMSE");
+    for (std::string prefix : {"", "direct.", "indirect.", "caustic.", "emission."}) {
+        if (!a.channels.count(prefix + "R") || !r.channels.count(prefix + "R")) continue;
+        std::vector<Vec3> x = a.rgb(prefix), y = r.rgb(prefix);
+        double mse = 0.0;
+        for (size_t i = 0; i < x.size(); ++i) mse += glm::dot(x[i] - y[i], x[i] - y[i]) / 3.0;
+        std::string name = prefix.empty() ? "beauty" : prefix.substr(0, prefix.size() - 1);
+        std::printf("%-10s %12.6g %12.6g\n", name.c_str(), relativeMse(x, y), std::sqrt(mse / double(x.size())));
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -390,7 +415,8 @@ int main(int argc, char** argv) {
         if (command == "render") return cmdRender(argc, argv);
         if (command == "info") return cmdInfo(argc, argv);
         if (command == "voxelize") return cmdVoxelize(argc, argv);
-        throw Error(ErrorKind::Config, "unknown command '" + command + "' (commands: render, info, voxelize)");
+        if (command == "compare") return cmdCompare(argc, argv);
+        throw Error(ErrorKind::Config, "unknown command '" + command + "' (commands: render, info, voxelize, compare)");
     } catch (const Error& e) {
         std::fprintf(stderr, "raysplat: error: %s\n", e.what());
         return 1;

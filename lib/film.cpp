@@ -171,6 +171,14 @@ ExrImage readExr(const std::string& path) {
     return img;
 }
 
+double relativeMse(const std::vector<Vec3>& a, const std::vector<Vec3>& ref) {
+    RS_CHECK(a.size() == ref.size());
+    double sum = 0.0;
+    for (size_t i = 0; i < a.size(); ++i)
+        for (int c = 0; c < 3; ++c) sum += sqr(a[i][c] - ref[i][c]) / (double(ref[i][c]) * ref[i][c] + 1e-2);
+    return a.empty() ? 0.0 : sum / (3.0 * double(a.size()));
+}
+
 std::vector<Vec3> ExrImage::rgb(const std::string& prefix) const {
     std::vector<Vec3> out(size_t(width) * height);
     const char* comp[3] = {"R", "G", "B"};

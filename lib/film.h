@@ -51,6 +51,10 @@ std::string encodePng(const Film& film, float exposureStops);
 // Writes the EXR to `file` as is (not atomic); errors name `path`.
 void writeExrTo(const std::string& file, const std::string& path, const Film& film, const ImageAttributes& attributes);
 
+// Relative MSE of `a` against the reference `ref`, per channel: mean of (a − r)² / (r² + ε),
+// ε = 0.01 keeping dark pixels from dominating. The figure the tests and benchmarks report.
+double relativeMse(const std::vector<Vec3>& a, const std::vector<Vec3>& ref);
+
 // Writes `contents` atomically (temporary file + rename); throws Error(Io).
 void writeFileAtomic(const std::string& path, const std::string& contents);
 void writeFileTo(const std::string& file, const std::string& path, const std::string& contents);

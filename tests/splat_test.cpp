@@ -62,17 +62,6 @@ Vec3 floorPoint(const Camera& c, int width, int x, int y) {
     return c.position + d * (c.position.y / -d.y);
 }
 
-double relativeMse(const std::vector<Vec3>& a, const std::vector<Vec3>& ref) {
-    double num = 0.0, den = 0.0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        for (int c = 0; c < 3; ++c) {
-            num += sqr(a[i][c] - ref[i][c]) / (sqr(ref[i][c]) + 1e-2);
-            den += 1.0;
-        }
-    }
-    return num / den;
-}
-
 }  // namespace
 
 // The splatted direct light on a diffuse floor matches L = ρ/π · I cosθ / r², on average over
