@@ -69,8 +69,9 @@ void commitTemporary(const std::string& tmp, const std::string& path) {
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
     if (ec) {
+        std::string why = ec.message();
         std::filesystem::remove(tmp, ec);
-        throw Error(ErrorKind::Io, path + ": cannot write: " + ec.message());
+        throw Error(ErrorKind::Io, path + ": cannot write: " + why);
     }
 }
 
@@ -103,7 +104,16 @@ std::string StagedFiles::stage(const std::string& path) {
 }
 
 void StagedFiles::commit() {
-    for (const auto& [tmp, path] : files_) commitTemporary(tmp, path);
+    // Renames are atomic one by one; if one fails, the files already renamed are removed
+    // again, so the set appears whole or not at all.
+    size_t done = 0;
+    try {
+        for (; done < files_.size(); ++done) commitTemporary(files_[done].first, files_[done].second);
+    } catch (...) {
+        std::error_code ec;
+        for (size_t i = 0; i < done; ++i) std::filesystem::remove(files_[i].second, ec);
+        throw;
+    }
     files_.clear();
 }
 

@@ -63,7 +63,7 @@ OcclusionGrid voxelize(const Scene& scene, const GridGeometry& geometry, const s
 }  // namespace
 
 OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter,
-                        Stats& stats) {
+                        Stats& stats, StagedFiles* outputs) {
     cfg.validateGrid();
     Timer timer;
     const GridGeometry geometry = gridForBounds(scene.bounds, cfg.grid);
@@ -114,7 +114,10 @@ OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool&
     }
     meta.cacheKey = keyOf(used);
     meta.voxelizer = voxelizerName(used);
-    if (!cfg.vdb.empty()) writeVdb(cfg.vdb, grid, meta);
+    if (!cfg.vdb.empty()) {
+        if (outputs) writeVdbTo(outputs->stage(cfg.vdb), cfg.vdb, grid, meta);
+        else writeVdb(cfg.vdb, grid, meta);
+    }
 
     stats.addTime("voxelize", timer.seconds());
     stats.setCount("voxels", double(geometry.voxelCount()));

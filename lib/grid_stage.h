@@ -25,8 +25,10 @@
 
 namespace rs {
 
+// With `outputs`, cfg.vdb is staged there (committed with the render's other outputs);
+// without, it is written atomically right away.
 OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter,
-                        Stats& stats);
+                        Stats& stats, StagedFiles* outputs = nullptr);
 
 // The cache file of a key: <cacheDir>/<key>.vdb.
 std::string cachePath(const std::string& cacheDir, const std::string& key);

@@ -66,7 +66,8 @@ Film renderPath(const Scene& scene, const RayAccel& accel, const LightSampler& l
 }
 
 Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
-                 int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats) {
+                 int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats,
+                 StagedFiles* outputs) {
     // Eye pass: where photon energy can land (DESIGN §4).
     Timer t;
     EyePassSettings es;
@@ -82,7 +83,7 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
 
     // Occlusion grid and the tree over it (DESIGN §5–7). Without visibility the tree indexes
     // the eye samples over an empty grid: nothing occludes.
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats);
+    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats, outputs);
     t = Timer();
     OcclusionTreeStats ts;
     OcclusionTree tree = buildOcclusionTree(cfg.method == Method::SplatNoVis ? OcclusionGrid(grid.geometry) : grid,
@@ -160,10 +161,11 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights: the image will be black");
 
     if (cfg.splats()) {
-        result.film = renderSplat(scene, accel, lights, camera, width, height, cfg, pool, reporter, stats);
+        result.film = renderSplat(scene, accel, lights, camera, width, height, cfg, pool, reporter, stats,
+                                  result.outputs.get());
     } else {
         // The path tracer does not need the grid; it is built only when asked for.
-        if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg, pool, reporter, stats);
+        if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg, pool, reporter, stats, result.outputs.get());
         result.film = renderPath(scene, accel, lights, camera, width, height, cfg, pool, reporter, stats);
     }
 
@@ -182,9 +184,9 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     return result;
 }
 
-void writeOutputs(const RenderResult& result, const RenderConfig& cfg) {
+void writeOutputs(RenderResult& result, const RenderConfig& cfg) {
     // All or nothing: every file is written under a temporary name first.
-    StagedFiles out;
+    StagedFiles& out = *result.outputs;
     writeExrTo(out.stage(cfg.output), cfg.output, result.film, result.attributes);
     if (!cfg.png.empty()) writeFileTo(out.stage(cfg.png), cfg.png, encodePng(result.film, cfg.exposure));
     if (!cfg.statsJson.empty()) writeFileTo(out.stage(cfg.statsJson), cfg.statsJson, result.stats.json());

@@ -1,6 +1,8 @@
 // The whole pipeline on one page (DESIGN §1): render() calls the stages in order.
 #pragma once
 
+#include <memory>
+
 #include "config.h"
 #include "film.h"
 #include "log.h"
@@ -13,12 +15,15 @@ struct RenderResult {
     Film film;
     Stats stats;
     ImageAttributes attributes;  // config + timings, for the EXR header
+    // Files written during the render (the --vdb grid), committed by writeOutputs together
+    // with the images, removed if the result is dropped.
+    std::shared_ptr<StagedFiles> outputs = std::make_shared<StagedFiles>();
 };
 
 RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter);
 
 // EXR (+ PNG, + stats JSON) as the config asks, each written atomically.
-void writeOutputs(const RenderResult& result, const RenderConfig& cfg);
+void writeOutputs(RenderResult& result, const RenderConfig& cfg);
 
 // The version string of this build.
 const char* versionString();

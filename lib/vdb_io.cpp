@@ -103,6 +103,13 @@ void forEachActive(const GridT& grid, Fn&& fn) {
 // -- Writing ----------------------------------------------------------------------------------
 
 void writeVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetadata& metadata) {
+    StagedFiles out;
+    writeVdbTo(out.stage(path), path, grid, metadata);
+    out.commit();
+}
+
+void writeVdbTo(const std::string& tmp, const std::string& path, const OcclusionGrid& grid,
+                const VdbMetadata& metadata) {
     initOpenVdb();
     const GridGeometry& g = grid.geometry;
     RS_CHECK(grid.counts.size() == g.voxelCount() * kSideCount);
@@ -175,7 +182,6 @@ void writeVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetad
                     openvdb::StringMetadata("index (i,j,k) -> centre of voxel (i,j,k) in Blender world; "
                                             "Blender (x,y,z) = glTF (x,-z,y); glTF = origin + voxel*voxel_size"));
 
-    std::string tmp = temporaryPathFor(path);
     try {
         openvdb::io::File file(tmp);
         file.write(grids, meta);
@@ -185,7 +191,6 @@ void writeVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetad
         std::filesystem::remove(tmp, ec);
         throw Error(ErrorKind::Io, path + ": cannot write VDB: " + oneLine(e.what()));
     }
-    commitTemporary(tmp, path);
 }
 
 // -- Reading ----------------------------------------------------------------------------------

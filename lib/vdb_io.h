@@ -55,6 +55,9 @@ struct VdbFile {
 
 // Writes the grid and metadata to `path` atomically; throws Error(Io) naming the file.
 void writeVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetadata& metadata);
+// The same, written to `file` as is (a staged temporary of `path`; errors name `path`).
+void writeVdbTo(const std::string& file, const std::string& path, const OcclusionGrid& grid,
+                const VdbMetadata& metadata);
 
 // Reads a file written by writeVdb. Throws Error(Io) with a one-line message naming the file
 // when it is missing, truncated, corrupt, of another format version, or not a raysplat grid.
