@@ -210,7 +210,7 @@ std::string fmt(const char* f, ...) {
     return buf;
 }
 
-std::string vec(const Vec3& v) { return fmt("(%.4g, %.4g, %.4g)", v.x, v.y, v.z); }
+std::string vec(const Vec3& v) { return fmt("(%.4g, %.4g, %.4g)", v.x + 0.f, v.y + 0.f, v.z + 0.f); }  // no "-0"
 
 // The occlusion grid's options, shared by render and voxelize.
 void addGridOptions(Command& cmd, RenderConfig& cfg) {

@@ -91,6 +91,11 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
     grid = OcclusionGrid();  // the tree holds what the splat needs
     stats.addTime("tree", t.seconds());
     stats.setCount("tree_nodes", double(ts.nodes));
+    stats.setCount("tree_nodes_empty", double(ts.empty));
+    stats.setCount("tree_nodes_split", double(ts.split));
+    stats.setCount("tree_nodes_occlusion", double(ts.occlusion));
+    stats.setCount("tree_nodes_visible", double(ts.visible));
+    stats.setCount("tree_depth", double(ts.depth));
     stats.setCount("tree_mb", ts.bytes / kMB);
     if (ts.samplesOutside > 0)
         reporter.warn(scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
