@@ -140,6 +140,7 @@ public:
     std::vector<kd_detail::OccluderEvent> occluders, occludersSorted;
     std::vector<kd_detail::SampleEvent> samples, samplesSorted;
     std::vector<uint32_t> histogram;
+    std::vector<int> rowLo, rowHi;  // the valid cells of each mask row
     uint32_t stamp = 0;
 };
 
@@ -192,6 +193,42 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
         return glm::dot(q, q) - along * along <= valid2;
     };
     if (s.fill.size() < cells) s.fill.resize(cells), s.sweep.resize(cells);
+    // The valid cells of each mask row j: [rowLo[j], rowHi[j]] (mask indices, may reach past
+    // the mask; empty when rowLo > rowHi). Per row the cells' distance² to the axis is a
+    // convex quadratic in i (second difference 2(1 − ω_U²) ≥ 1, far above rounding), so the
+    // valid cells are contiguous; the bounds are estimated analytically, then settled with
+    // validCell itself so that they agree with it exactly.
+    if (s.rowLo.size() < size_t(sizeV)) s.rowLo.resize(size_t(sizeV)), s.rowHi.resize(size_t(sizeV));
+    {
+        const float qa = 1.f - w[U] * w[U], qb = w[U] * w[V], qc = 1.f - w[V] * w[V];
+        for (int j = 0; j < sizeV; ++j) {
+            const int jj = j - halfV;
+            const float y = float(jj) + 0.5f;
+            // Q(x) = qa x² − 2 qb x y + qc y², x = i + ½ (relative to the mask centre).
+            const float xc = qb * y / qa;
+            int ic = int(std::floor(xc));  // x = ic + ½ is the cell centre nearest the minimum
+            if (!validCell(ic, jj)) {
+                if (validCell(ic - 1, jj)) --ic;
+                else if (validCell(ic + 1, jj)) ++ic;
+                else {
+                    s.rowLo[size_t(j)] = INT_MAX / 2, s.rowHi[size_t(j)] = INT_MIN / 2;
+                    continue;
+                }
+            }
+            const float disc = std::max(0.f, qb * qb * y * y - qa * (qc * y * y - valid2));
+            const float half = std::sqrt(disc) / qa;
+            int lo = std::min(ic, int(std::floor(xc - half - 0.5f)) + 1);
+            int hi = std::max(ic, int(std::floor(xc + half - 0.5f)));
+            while (lo < ic && !validCell(lo, jj)) ++lo;
+            while (validCell(lo - 1, jj)) --lo;
+            while (hi > ic && !validCell(hi, jj)) --hi;
+            while (validCell(hi + 1, jj)) ++hi;
+            s.rowLo[size_t(j)] = lo + halfU, s.rowHi[size_t(j)] = hi + halfU;
+        }
+    }
+    auto validMaskCell = [&](int i, int j) {  // mask indices; j within the mask
+        return i >= s.rowLo[size_t(j)] && i <= s.rowHi[size_t(j)];
+    };
     if (++s.stamp == 0) {
         for (FillCell& c : s.fill) c.stamp = 0;
         s.stamp = 1;
@@ -254,11 +291,12 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
         range(V, kV, halfV, v0, v1);
         if (u0 < 0 || v0 < 0 || u1 >= sizeU || v1 >= sizeV) return false;
         int firstSlice = forward ? int(e.lo[N]) : dimN - int(e.hi[N]);
-        for (int j = v0; j <= v1; ++j)
-            for (int i = u0; i <= u1; ++i) {
-                const FillCell& f = s.fill[size_t(i) + size_t(sizeU) * j];
-                if ((f.stamp != stamp || f.fullAt >= firstSlice) && validCell(i - halfU, j - halfV)) return false;
-            }
+        for (int j = v0; j <= v1; ++j) {
+            const int i0 = std::max(u0, s.rowLo[size_t(j)]), i1 = std::min(u1, s.rowHi[size_t(j)]);
+            const FillCell* row = &s.fill[size_t(sizeU) * size_t(j)];
+            for (int i = i0; i <= i1; ++i)
+                if (row[i].stamp != stamp || row[i].fullAt >= firstSlice) return false;
+        }
         return true;
     };
 
@@ -356,7 +394,8 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
         // four full cells give exactly 1.
         float num = 0.f, den = 0.f;
         auto cell = [&](int i, int j, float weight) {
-            if (weight <= 0.f || !validCell(i - halfU, j - halfV)) return;
+            if (weight <= 0.f) return;
+            if (j >= 0 && j < sizeV ? !validMaskCell(i, j) : !validCell(i - halfU, j - halfV)) return;
             float c = i < 0 || j < 0 || i >= sizeU || j >= sizeV ? 0.f : std::min(1.f, s.sweep[size_t(i) + size_t(sizeU) * j]);
             num += weight * c;
             den += weight;
