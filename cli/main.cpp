@@ -249,11 +249,11 @@ int cmdRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});
     cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default 0.2,0.5,0.3)",
              [&](const std::string& v) { parseTriple("--split", v, cfg.split); }});
-    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,64,16)",
+    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,32,16)",
              [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
     cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,2,1)",
              [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
-    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default 16,48,16)",
+    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default 16,24,16)",
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
     cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
              [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
