@@ -251,7 +251,7 @@ int cmdRender(int argc, char** argv) {
              [&](const std::string& v) { parseTriple("--split", v, cfg.split); }});
     cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,32,16)",
              [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
-    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,2,1)",
+    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,6,1)",
              [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
     cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default 16,24,16)",
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});

@@ -37,7 +37,7 @@ struct PhotonSettings {
     int64_t photons = 100000;               // M, total stored photon rays
     float split[kPhotonClassCount] = {0.2f, 0.5f, 0.3f};  // direct, indirect, caustic (paper)
     float k[kPhotonClassCount] = {16.f, 32.f, 16.f};        // photons wanted under a kernel
-    float minRadius[kPhotonClassCount] = {1.f, 2.f, 1.f};   // voxels
+    float minRadius[kPhotonClassCount] = {1.f, 6.f, 1.f};   // voxels
     float maxRadius[kPhotonClassCount] = {16.f, 24.f, 16.f};  // voxels
     float voxelSize = 0.01f;                 // metres, to express the clamps
     int maxDepth = 32;                       // segments a path
