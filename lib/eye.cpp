@@ -1,5 +1,12 @@
 #include "eye.h"
 
+#include "accel.h"
+#include "bsdf.h"
+#include "camera.h"
+#include "log.h"
+#include "parallel.h"
+#include "sampling.h"
+
 namespace rs {
 
 namespace {
@@ -76,13 +83,6 @@ void EyeSamples::permute(const std::vector<uint32_t>& order) {
 }  // namespace rs
 
 // -- The eye pass --------------------------------------------------------------------------
-
-#include "accel.h"
-#include "bsdf.h"
-#include "camera.h"
-#include "log.h"
-#include "parallel.h"
-#include "sampling.h"
 
 namespace rs {
 
