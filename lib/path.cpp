@@ -76,9 +76,14 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
                 Vec3 f = bsdf.eval(wo, ls.wi);
                 float cosI = std::abs(glm::dot(ls.wi, bsdf.shadingNormal()));
                 if (!isBlack(f) && cosI > 0.f) {
+                    // Aim from the offset origin at the light point itself: along ls.wi, the
+                    // offset would carry the ray through the light's plane before tmax when the
+                    // surface faces the light at low elevation, and the light would shadow itself.
                     Vec3 origin = offsetRayOrigin(sp, ls.wi);
-                    float tmax = std::isfinite(ls.dist) ? glm::length(sp.p + ls.wi * ls.dist - origin) * (1.f - 1e-4f) : kInf;
-                    if (!accel.occluded(origin, ls.wi, tmax)) {
+                    bool visible = std::isfinite(ls.dist)
+                                       ? !accel.occluded(origin, sp.p + ls.wi * ls.dist - origin, 1.f - 1e-4f)
+                                       : !accel.occluded(origin, ls.wi, kInf);
+                    if (visible) {
                         float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, bsdf.pdf(wo, ls.wi));
                         out.layer[cls.layerOfArrival(true)] += beta * f * ls.radiance * (cosI * w / ls.pdf);
                     }

@@ -83,6 +83,36 @@ TEST(PathTracer, SpotLightConeLimitsIrradiance) {
     EXPECT_EQ(radianceAt({2.f, 0, 0}), 0.f);  // 0.79 rad off axis: outside the outer cone
 }
 
+// A plate 0.78 m under a small ceiling light, like the top of the Cornell box's tall box:
+// its radiance is ρ/π times the irradiance of Lambert's polygon formula. The light is seen at
+// low elevation from the plate's far points, where shadow rays that overshoot the light by
+// the origin offset used to hit the light itself (a 3× deficit that Mitsuba exposed).
+TEST(PathTracer, AreaLightIrradianceNearTheLightMatchesLambertsFormula) {
+    Scene s;
+    const float rho = 0.75f, h = 1.98f;
+    const Vec3 Le(20.f);
+    uint32_t plate = addMaterial(s, MaterialKind::Lambert, Vec3(rho));
+    uint32_t light = addMaterial(s, MaterialKind::Lambert, Vec3(0.f), Le);
+    addQuad(s, {-1.5f, 1.2f, -1.5f}, {-1.5f, 1.2f, 1.5f}, {1.5f, 1.2f, 1.5f}, {1.5f, 1.2f, -1.5f}, plate);
+    const Vec3 corners[4] = {{-0.25f, h, -0.2f}, {0.25f, h, -0.2f}, {0.25f, h, 0.2f}, {-0.25f, h, 0.2f}};
+    addQuad(s, corners[0], corners[1], corners[2], corners[3], light);  // faces down
+    s.computeBounds();
+
+    for (Vec3 target : {Vec3(0.f, 1.2f, 0.f), Vec3(-0.585f, 1.2f, -0.335f), Vec3(1.1f, 1.2f, 0.4f)}) {
+        // Lambert: E = Le/2 · Σ βᵢ (n · unit(vᵢ × vᵢ₊₁)) over the polygon's edges seen from target.
+        double e = 0.0;
+        for (int i = 0; i < 4; ++i) {
+            DVec3 a = DVec3(corners[i] - target), b = DVec3(corners[(i + 1) % 4] - target);
+            DVec3 c = glm::cross(a, b);
+            e += std::acos(glm::dot(glm::normalize(a), glm::normalize(b))) * glm::normalize(c).y;
+        }
+        double expected = rho / kPi * 0.5 * Le.x * std::abs(e);
+        Vec3 eye = target + Vec3(0.05f, 0.3f, 0.1f);
+        Vec3 L = meanRadiance(s, eye, glm::normalize(target - eye), 20000, 5, 2);
+        EXPECT_NEAR(L.x, expected, 0.02 * expected) << "target " << target.x << "," << target.z;
+    }
+}
+
 // A closed diffuse sphere emitting Le everywhere inside: L = Le / (1 − ρ) in every direction.
 TEST(PathTracer, WhiteFurnaceClosedSphere) {
     Scene s;
