@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""Validate raysplat's path tracer against Mitsuba 3 on the scenes of data/.
+
+  python3 scripts/validate_mitsuba.py [--build build] [--out out/study]
+                                      [--size 256] [--reference-spp 4096] [--mitsuba-spp 1024]
+                                      [SCENE ...]
+
+Each scene is converted by gltf_to_mitsuba.py and rendered by Mitsuba's `path`
+integrator (llvm_ad_rgb when a libLLVM ≥ 16 is installed, else scalar_rgb) and by
+`raysplat render --method path`, each as two independent halves. The halves estimate each
+renderer's own noise, so the test is whether the two renderers differ by more than their
+noise: ratio = relMSE(raysplat, Mitsuba) / (noise of raysplat + noise of Mitsuba), near 1
+when they agree, per pixel and on 8×8-pixel block means (which shows a low-frequency bias
+64× more sharply). Renders are cached in OUT; a changed scene or setting renders again.
+"""
+
+import argparse
+import glob
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import venv_bootstrap  # noqa: E402
+
+if __name__ == "__main__":
+    venv_bootstrap.ensure()
+
+import numpy as np  # noqa: E402
+
+import gltf_to_mitsuba  # noqa: E402
+import images  # noqa: E402
+import studyutil  # noqa: E402
+from studyutil import log  # noqa: E402
+
+AGREE_RATIO = 1.5  # block-level ratio up to which two renders count as equal within noise
+BLOCK = 8
+_variant = None
+
+
+def mitsuba():
+    """The mitsuba module with the fastest variant that works on this machine."""
+    global _variant
+    import mitsuba as mi
+    if _variant is None:
+        for v in ("llvm_ad_rgb", "scalar_rgb"):
+            try:
+                mi.set_variant(v)
+                mi.render(mi.load_dict({"type": "scene", "i": {"type": "path"}, "s": {"type": "perspective",
+                                        "film": {"type": "hdrfilm", "width": 2, "height": 2}}}), spp=1)
+                _variant = v
+                break
+            except Exception as e:  # a missing libLLVM surfaces as a plain exception
+                log(f"mitsuba: variant {v} unavailable ({str(e).splitlines()[0]})")
+        if _variant is None:
+            sys.exit("error: no usable Mitsuba 3 variant")
+        log(f"mitsuba {mi.__version__}, variant {_variant}")
+    return mi
+
+
+def render_mitsuba(xml, out, spp, seed, pass_spp=32):
+    """Render xml at spp samples (in passes of pass_spp, bounded memory); cached by key."""
+    mi = mitsuba()
+    key = out[:-4] + ".key"
+    want = json.dumps({"xml": studyutil.file_digest(xml), "spp": spp, "seed": seed,
+                       "mitsuba": mi.__version__, "variant": _variant})
+    if os.path.exists(out) and os.path.exists(key) and open(key).read() == want:
+        return images.read_layers(out)["beauty"], None
+    scene = mi.load_file(xml)
+    t0 = time.perf_counter()
+    acc, done = None, 0
+    while done < spp:
+        n = min(pass_spp, spp - done)
+        img = np.array(mi.render(scene, spp=n, seed=seed * 1_000_003 + done), dtype=np.float64)
+        acc = img * n if acc is None else acc + img * n
+        done += n
+    wall = time.perf_counter() - t0
+    rgb = (acc / spp).astype(np.float32)
+    images.write_exr(out, rgb)
+    with open(key, "w") as f:
+        f.write(want)
+    return rgb, wall
+
+
+def validate(binary, scene, outdir, size, reference_spp, mitsuba_spp):
+    """Compare the raysplat path-traced reference of scene with Mitsuba. Returns a dict."""
+    name = os.path.splitext(os.path.basename(scene))[0]
+    outdir = os.path.join(outdir, name)
+    ref, ref_noise, halves = studyutil.reference(binary, scene, outdir, size, reference_spp, f"{name}: ")
+    xml = gltf_to_mitsuba.convert(scene, os.path.join(outdir, "mitsuba"), size[0], size[1], mitsuba_spp)
+    mi_halves, walls = [], []
+    for seed in (1, 2):
+        log(f"{name}: Mitsuba half {seed}: {mitsuba_spp // 2} spp (cached when unchanged)")
+        rgb, wall = render_mitsuba(xml, os.path.join(outdir, f"mitsuba_{mitsuba_spp}spp_half{seed}.exr"),
+                                   mitsuba_spp // 2, seed)
+        mi_halves.append(rgb)
+        walls.append(wall)
+    ours = ref["beauty"]
+    theirs = 0.5 * (mi_halves[0] + mi_halves[1])
+    mi_noise = studyutil.half_noise(*mi_halves)
+    ob = [studyutil.block_means(h["beauty"], BLOCK) for h in halves]
+    mb = [studyutil.block_means(h, BLOCK) for h in mi_halves]
+    ours_b, theirs_b = 0.5 * (ob[0] + ob[1]), 0.5 * (mb[0] + mb[1])
+    block_noise = studyutil.half_noise(*ob) + studyutil.half_noise(*mb)
+    result = {
+        "scene": os.path.basename(scene),
+        "variant": _variant,
+        "mitsuba_spp": mitsuba_spp,
+        "reference_spp": reference_spp,
+        "rel_mse": images.rel_mse(ours, theirs),
+        "noise": ref_noise + mi_noise,
+        "block_rel_mse": images.rel_mse(ours_b, theirs_b),
+        "block_noise": block_noise,
+        "mean_ours": ours.mean(axis=(0, 1)).tolist(),
+        "mean_mitsuba": theirs.mean(axis=(0, 1)).tolist(),
+        "flip": images.flip(ours, theirs)[0],
+    }
+    result["ratio"] = result["rel_mse"] / max(result["noise"], 1e-30)
+    result["block_ratio"] = result["block_rel_mse"] / max(block_noise, 1e-30)
+    result["agrees"] = result["block_ratio"] <= AGREE_RATIO
+    result["mitsuba_seconds"] = sum(w for w in walls if w is not None) if all(w is not None for w in walls) else None
+
+    # Picture: raysplat | Mitsuba | relative difference of 8×8 block means (black 0, bright ≥ 10 %).
+    e = images.auto_exposure(theirs)
+    zmap = studyutil.upscale(images.false_colour(images.diff_image(ours_b, theirs_b), 0.1), BLOCK)
+    pad = np.full((ours.shape[0], 4, 3), 255, np.uint8)
+    result["image"] = os.path.join(outdir, "mitsuba_vs_raysplat.png")
+    images.save_png(result["image"], np.hstack([images.to_srgb8(ours, e), pad, images.to_srgb8(theirs, e), pad,
+                                                zmap[:ours.shape[0], :ours.shape[1]]]))
+    return result
+
+
+def data_scenes():
+    return sorted(glob.glob(os.path.join(studyutil.ROOT, "data", "*.gltf")) +
+                  glob.glob(os.path.join(studyutil.ROOT, "data", "*.glb")))
+
+
+def markdown(results):
+    lines = ["| Scene | Mitsuba / raysplat mean RGB | relMSE (noise) | ratio | 8×8 blocks: relMSE (noise) | ratio | FLIP | verdict |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        ratio_of_means = " ".join(f"{m / o:.3f}" if o > 0 else "–" for m, o in zip(r["mean_mitsuba"], r["mean_ours"]))
+        lines.append(f"| {r['scene']} | {ratio_of_means} | {r['rel_mse']:.2e} ({r['noise']:.2e}) | {r['ratio']:.2f} "
+                     f"| {r['block_rel_mse']:.2e} ({r['block_noise']:.2e}) | {r['block_ratio']:.2f} "
+                     f"| {r['flip']:.3f} | {'agree within noise' if r['agrees'] else 'differ'} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scenes", nargs="*", help="glTF scenes (default: every scene of data/)")
+    ap.add_argument("--build", default=os.path.join(studyutil.ROOT, "build"), help="meson build directory")
+    ap.add_argument("--out", default=os.path.join(studyutil.ROOT, "out", "study"), help="cache and output directory")
+    ap.add_argument("--size", type=int, default=256, help="image width and height in pixels")
+    ap.add_argument("--reference-spp", type=int, default=4096, help="raysplat path tracer samples per pixel")
+    ap.add_argument("--mitsuba-spp", type=int, default=1024, help="Mitsuba samples per pixel")
+    args = ap.parse_args()
+    binary = studyutil.find_binary(args.build)
+    results = [validate(binary, s, args.out, (args.size, args.size), args.reference_spp, args.mitsuba_spp)
+               for s in (args.scenes or data_scenes())]
+    print(markdown(results))
+    for r in results:
+        print(f"{r['scene']}: {r['image']}")
+    sys.exit(0 if all(r["agrees"] for r in results) else 1)
+
+
+if __name__ == "__main__":
+    main()
