@@ -5,6 +5,9 @@
 #                           to out/cornell_box.exr and out/cornell_box.png
 #   scripts/run.sh test     install what is missing, build, run the whole test suite
 #   scripts/run.sh build    install what is missing and build (build/raysplat)
+#   scripts/run.sh study    also install python3-venv and libLLVM 19 (for Mitsuba's LLVM
+#                           variant), build, and run the quality study (scripts/study.py),
+#                           which writes docs/results/ and the README's Results section
 #
 # Packages are installed with apt-get only when one is missing (needs root or sudo).
 set -euo pipefail
@@ -17,6 +20,7 @@ packages=(g++ pkg-config meson ninja-build python3 zlib1g-dev
 
 install_missing() {
   local missing=()
+  [ "${1:-}" = study ] && packages+=(python3-venv python3-pip libllvm19)
   for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
   done
@@ -45,6 +49,10 @@ case "${1:-}" in
     ;;
   build)
     install_missing; build ;;
+  study)
+    install_missing study; build
+    python3 scripts/study.py
+    ;;
   *)
-    echo "usage: scripts/run.sh render|test|build" >&2; exit 2 ;;
+    echo "usage: scripts/run.sh render|test|build|study" >&2; exit 2 ;;
 esac
