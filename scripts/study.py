@@ -302,14 +302,9 @@ def update_readme(readme, body):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("scenes", nargs="*", help="glTF scenes (default: every scene of data/)")
-    ap.add_argument("--build", default=os.path.join(studyutil.ROOT, "build"), help="meson build directory")
-    ap.add_argument("--out", default=os.path.join(studyutil.ROOT, "out", "study"), help="renders and caches")
-    ap.add_argument("--size", type=int, default=256, help="image width and height (default 256)")
+    studyutil.add_common_arguments(ap)
     ap.add_argument("--photons", default="25000,50000,100000,200000,400000",
                     help="photon counts for raysplat, comma-separated")
-    ap.add_argument("--reference-spp", type=int, default=2048, help="path tracer reference samples per pixel")
-    ap.add_argument("--mitsuba-spp", type=int, default=1024, help="Mitsuba samples per pixel")
     ap.add_argument("--readme", default=os.path.join(studyutil.ROOT, "README.md"), help="README to update")
     ap.add_argument("--no-readme", action="store_true", help="leave the README alone")
     ap.add_argument("--results", default=os.path.join(studyutil.ROOT, RESULTS_DIR),

@@ -19,6 +19,18 @@ def log(msg):
     print(msg, flush=True)
 
 
+def add_common_arguments(ap):
+    """Arguments shared by study.py and validate_mitsuba.py, with the same defaults, so
+    that either script reuses the renders the other cached."""
+    ap.add_argument("scenes", nargs="*", help="glTF scenes (default: every scene of data/)")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="meson build directory")
+    ap.add_argument("--out", default=os.path.join(ROOT, "out", "study"), help="renders and caches")
+    ap.add_argument("--size", type=int, default=256, help="image width and height in pixels (default 256)")
+    ap.add_argument("--reference-spp", type=int, default=2048,
+                    help="samples per pixel of the path-traced reference (default 2048)")
+    ap.add_argument("--mitsuba-spp", type=int, default=1024, help="Mitsuba samples per pixel (default 1024)")
+
+
 def find_binary(build):
     path = os.path.join(build, "raysplat")
     if not os.access(path, os.X_OK):

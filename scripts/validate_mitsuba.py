@@ -2,7 +2,7 @@
 """Validate raysplat's path tracer against Mitsuba 3 on the scenes of data/.
 
   python3 scripts/validate_mitsuba.py [--build build] [--out out/study]
-                                      [--size 256] [--reference-spp 4096] [--mitsuba-spp 1024]
+                                      [--size 256] [--reference-spp 2048] [--mitsuba-spp 1024]
                                       [SCENE ...]
 
 Each scene is converted by gltf_to_mitsuba.py and rendered by Mitsuba's `path`
@@ -149,12 +149,7 @@ def markdown(results):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("scenes", nargs="*", help="glTF scenes (default: every scene of data/)")
-    ap.add_argument("--build", default=os.path.join(studyutil.ROOT, "build"), help="meson build directory")
-    ap.add_argument("--out", default=os.path.join(studyutil.ROOT, "out", "study"), help="cache and output directory")
-    ap.add_argument("--size", type=int, default=256, help="image width and height in pixels")
-    ap.add_argument("--reference-spp", type=int, default=4096, help="raysplat path tracer samples per pixel")
-    ap.add_argument("--mitsuba-spp", type=int, default=1024, help="Mitsuba samples per pixel")
+    studyutil.add_common_arguments(ap)
     args = ap.parse_args()
     binary = studyutil.find_binary(args.build)
     results = [validate(binary, s, args.out, (args.size, args.size), args.reference_spp, args.mitsuba_spp)
