@@ -112,14 +112,17 @@ def path_error_at(paths, seconds):
 
 
 def verdict(result):
-    wins = [r for r in result["splat"] if r["rel_mse"] < path_error_at(result["path"], r["seconds"])]
+    ratios = [r["rel_mse"] / path_error_at(result["path"], r["seconds"]) for r in result["splat"]]
+    wins = [r for r, q in zip(result["splat"], ratios) if q < 1.0]
     budgets = ", ".join(f"{r['seconds']:.0f} s" for r in result["splat"])
+    margin = (f"; at equal time raysplat's relative MSE is {min(ratios):.3g}–{max(ratios):.3g}× "
+              "the path tracer's")
     if not wins:
-        return f"nowhere: the path tracer has the lower error at every budget measured ({budgets})"
+        return f"nowhere: the path tracer has the lower error at every budget measured ({budgets}){margin}"
     if len(wins) == len(result["splat"]):
-        return f"raysplat has the lower error at every budget measured ({budgets})"
+        return f"raysplat has the lower error at every budget measured ({budgets}){margin}"
     return ("raysplat has the lower error at " + ", ".join(f"{r['seconds']:.0f} s" for r in wins) +
-            "; the path tracer at the other budgets (" + budgets + ")")
+            "; the path tracer at the other budgets (" + budgets + ")" + margin)
 
 
 # -- Pictures -------------------------------------------------------------------------------
@@ -237,10 +240,10 @@ def scene_table(res):
         lines.append(f"| {label} | {r['photons']:,} photons | {r['seconds']:.1f} | {build:.2f} | "
                      f"{sec.get('eye', 0):.2f} | {sec.get('photons', 0):.2f} | {sec.get('splat', 0):.1f} | "
                      f"{fmt_mb(mem)} ({fmt_mb(cnt.get('tree_mb', 0))} + {fmt_mb(cnt.get('eye_samples_mb', 0))} + "
-                     f"{fmt_mb(cnt.get('photon_mb', 0))}) | {r['rel_mse']:.4f} | {r['flip']:.3f} |")
+                     f"{fmt_mb(cnt.get('photon_mb', 0))}) | {r['rel_mse']:.3g} | {r['flip']:.3f} |")
     for r in res["path"]:
         lines.append(f"| path tracer | {r['spp']} spp | {r['seconds']:.1f} | – | – | – | – | – | "
-                     f"{r['rel_mse']:.4f} | {r['flip']:.3f} |")
+                     f"{r['rel_mse']:.3g} | {r['flip']:.3f} |")
     return "\n".join(lines)
 
 
