@@ -17,8 +17,10 @@
 #include "error.h"
 #include "log.h"
 #include "scene.h"
+#include "test_scenes.h"
 
 using namespace rs;
+using rs::test::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
@@ -33,28 +35,6 @@ std::string envOr(const char* name, const std::string& fallback) {
 std::string dataPath(const std::string& file) {
     return (fs::path(envOr("RAYSPLAT_DATA", "data")) / file).string();
 }
-
-// A fresh directory under the system temp directory, removed with everything in it.
-class TempDir {
-public:
-    TempDir() {
-        static int counter = 0;
-        const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        std::string name = "raysplat_scene_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++) +
-                           "_" + (info ? info->name() : "x");
-        path_ = fs::temp_directory_path() / name;
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-private:
-    fs::path path_;
-};
 
 void writeFile(const std::string& path, const std::string& bytes) {
     std::ofstream f(path, std::ios::binary);

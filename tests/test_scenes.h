@@ -1,12 +1,42 @@
 // Scenes built in code for tests: exact geometry whose answers are known analytically.
 #pragma once
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "scene.h"
 
 namespace rs::test {
+
+// A fresh directory under the system temp directory, named after the test and removed with
+// everything in it.
+class TempDir {
+public:
+    TempDir() {
+        static int counter = 0;
+        const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        path_ = std::filesystem::temp_directory_path() /
+                ("raysplat_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++) + "_" +
+                 (info ? std::string(info->test_suite_name()) + "_" + info->name() : std::string("x")));
+        std::filesystem::remove_all(path_);
+        std::filesystem::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    std::string file(const std::string& name) const { return (path_ / name).string(); }
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
 
 // Appends triangle (a, b, c) (counter-clockwise = front) with flat normals.
 inline void addTriangle(Scene& s, Vec3 a, Vec3 b, Vec3 c, uint32_t material) {
