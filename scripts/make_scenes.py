@@ -7,6 +7,12 @@
                            icosahedron; single binary GLB file
   direct_light.gltf        ground plane, three occluders, one point light;
                            buffer embedded as a base64 data URI
+  two_rooms_sealed.gltf    two 4 x 2.5 x 3 m rooms sharing an 8 cm wall, a
+                           ceiling light in one, the camera in the other:
+                           nothing connects them, so the image is black
+  two_rooms_gap.gltf       the same rooms joined by a 25 cm wide opening in
+                           the shared wall: light reaches the camera's room
+                           only through it
 
 Usage:  python3 scripts/make_scenes.py [outdir]
 
@@ -438,16 +444,102 @@ def direct_light(outdir):
     return g
 
 
+# Two rooms side by side along z, sharing one wall (the camera's room at
+# z < 0, the lit room at z > 0). Each room is a closed box of inward-facing
+# quads; the shared wall is the two rooms' facing quads, WALL apart, so it is
+# a solid 8 cm wall as far as either room can tell.
+ROOM_X, ROOM_H, ROOM_D, WALL = 2.0, 2.5, 3.0, 0.08
+ROOM_LIGHT_STRENGTH = 150.0  # the dark room is lit only through the opening
+GAP_X, GAP_W, GAP_H = 0.6, 0.25, 2.0  # the opening: x in [GAP_X, GAP_X + GAP_W]
+
+
+def wall_with_hole(z, normal, hole):
+    """The shared wall's face at depth z (normal +-Z), full width and height,
+    less the opening when `hole`."""
+    parts = []
+    def piece(x0, x1, y0, y1):
+        parts.append(rect(((x0 + x1) / 2, (y0 + y1) / 2, z),
+                          mul(X, (x1 - x0) / 2), mul(Y, (y1 - y0) / 2),
+                          normal))
+    if not hole:
+        piece(-ROOM_X, ROOM_X, 0.0, ROOM_H)
+    else:
+        piece(-ROOM_X, GAP_X, 0.0, ROOM_H)
+        piece(GAP_X + GAP_W, ROOM_X, 0.0, ROOM_H)
+        piece(GAP_X, GAP_X + GAP_W, GAP_H, ROOM_H)
+    return merge(*parts)
+
+
+def two_rooms(outdir, gap):
+    name = "two_rooms_gap" if gap else "two_rooms_sealed"
+    g = GltfBuilder(name)
+    white = g.material("white", WHITE)
+    floor = g.material("floor", (0.55, 0.42, 0.3))
+    light = g.material("light", (0.0, 0.0, 0.0), emissive=LIGHT_RGB,
+                       strength=ROOM_LIGHT_STRENGTH)
+    half = WALL / 2
+    for room, (z0, z1) in (("dark", (-half - ROOM_D, -half)),
+                           ("lit", (half, half + ROOM_D))):
+        zc, zh = (z0 + z1) / 2, (z1 - z0) / 2
+        shared_z, shared_n = (z1, mul(Z, -1)) if room == "dark" else (z0, Z)
+        outer_z, outer_n = (z0, Z) if room == "dark" else (z1, mul(Z, -1))
+        walls = [  # normals point into the room
+            ("floor", rect((0, 0, zc), mul(X, ROOM_X), mul(Z, zh), Y), floor),
+            ("ceiling", rect((0, ROOM_H, zc), mul(X, ROOM_X), mul(Z, zh),
+                             mul(Y, -1)), white),
+            ("left_wall", rect((-ROOM_X, ROOM_H / 2, zc), mul(Y, ROOM_H / 2),
+                               mul(Z, zh), X), white),
+            ("right_wall", rect((ROOM_X, ROOM_H / 2, zc), mul(Y, ROOM_H / 2),
+                                mul(Z, zh), mul(X, -1)), white),
+            ("outer_wall", rect((0, ROOM_H / 2, outer_z), mul(X, ROOM_X),
+                                mul(Y, ROOM_H / 2), outer_n), white),
+            ("shared_wall", wall_with_hole(shared_z, shared_n, gap), white),
+        ]
+        for wall, geom, m in walls:
+            g.node(room + "_" + wall, mesh=g.mesh(room + "_" + wall, geom, m))
+    if gap:  # the opening's sides, top and floor, facing into it
+        x0, x1 = GAP_X, GAP_X + GAP_W
+        jambs = merge(
+            rect((x0, GAP_H / 2, 0), mul(Y, GAP_H / 2), mul(Z, half), X),
+            rect((x1, GAP_H / 2, 0), mul(Y, GAP_H / 2), mul(Z, half),
+                 mul(X, -1)),
+            rect(((x0 + x1) / 2, GAP_H, 0), mul(X, GAP_W / 2), mul(Z, half),
+                 mul(Y, -1)))
+        g.node("opening_jambs", mesh=g.mesh("opening_jambs", jambs, white))
+        g.node("opening_floor", mesh=g.mesh("opening_floor", rect(
+            ((x0 + x1) / 2, 0, 0), mul(X, GAP_W / 2), mul(Z, half), Y),
+            floor))
+    # A glass ball in the lit room near the shared wall: caustic photons land
+    # right beside the wall.
+    glass = g.material("glass", (1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.5)
+    g.node("glass_ball", t=(-0.9, 0.3, half + 0.6),
+           mesh=g.mesh("glass_ball", uv_sphere(0.3, 24, 12), glass))
+    g.node("ceiling_light", mesh=g.mesh("ceiling_light", rect(
+        (0, ROOM_H - 0.01, half + ROOM_D / 2), mul(X, 0.3), mul(Z, 0.3),
+        mul(Y, -1)), light))
+    # The first camera looks at the shared wall from the dark room; the
+    # second shows the lit room (tests compare the two).
+    g.camera("camera", eye=(-1.4, 1.5, -half - ROOM_D + 0.2),
+             target=(0.4, 0.6, 0.0), yfov=1.1, aspect=1.333)
+    g.camera("lit_camera", eye=(1.4, 1.5, half + ROOM_D - 0.2),
+             target=(-0.4, 0.9, 0.0), yfov=1.0, aspect=1.333)
+    g.write_gltf(os.path.join(outdir, name + ".gltf"))
+    return g
+
+
 def main(argv):
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
     os.makedirs(outdir, exist_ok=True)
-    for build in (cornell_box, glossy_box, direct_light):
+    for build in (cornell_box, glossy_box, direct_light,
+                  lambda d: two_rooms(d, gap=False),
+                  lambda d: two_rooms(d, gap=True)):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n
                    for p in g.doc["meshes"][n["mesh"]]["primitives"])
-        print("%-13s %2d nodes, %4d triangles (instanced)" % (
+        print("%-16s %2d nodes, %4d triangles (instanced)" % (
             g.doc["scenes"][0]["name"], len(g.doc["nodes"]), tris))
     print("wrote scenes to", outdir)
 
