@@ -112,6 +112,8 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
     ps.voxelSize = tree.geometry.voxelSize;
     ps.maxDepth = cfg.maxDepth;
     ps.seed = cfg.seed;
+    SplatSettings splat;
+    splat.visibility = cfg.method == Method::Splat;
     double photonMb = 0.0;
     int64_t stored = 0;
     SplatStats ss;
@@ -128,7 +130,7 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
         stats.setCount("photon_paths", double(photons.pathsTraced));
         Timer tsplat;
         Film f(width, height);
-        splatPhotons(scene, tree, eye.samples, photons, f, pool, reporter, &ss);
+        splatPhotons(scene, accel, tree, eye.samples, photons, splat, f, pool, reporter, &ss);
         stats.addTime("splat", tsplat.seconds());
         return f;
     }, passes);
@@ -136,6 +138,9 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
     stats.setCount("photons_stored", double(stored));
     stats.setCount("splat_contributions", double(ss.contributions));
     stats.setCount("traversal_nodes", double(ss.traversal.nodes));
+    stats.setCount("splat_visibility_rays", double(ss.visibilityRays));
+    stats.setCount("splat_refused_behind_origin", double(ss.refused[SegmentReceivers::kBehindOrigin]));
+    stats.setCount("splat_refused_hidden", double(ss.refused[SegmentReceivers::kHidden]));
 
     // The film: emission, albedo and normal from the eye pass, the rest from the photons.
     for (int l = 0; l < kLayerCount; ++l)

@@ -6,6 +6,7 @@
 
 #include <mutex>
 
+#include "accel.h"
 #include "bsdf.h"
 #include "log.h"
 #include "parallel.h"
@@ -26,10 +27,36 @@ inline int64_t toFixed(float v) {
     return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
 }
 
+// The offset that lifts a point off its surface, as offsetRayOrigin does.
+inline float surfaceEpsilon(const Vec3& p) {
+    return 1e-4f * (1.f + std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+}
+
 }  // namespace
 
-void splatPhotons(const Scene& scene, const OcclusionTree& tree, const EyeSamples& samples, const PhotonMap& photons,
-                  Film& film, ThreadPool& pool, Reporter& reporter, SplatStats* statsOut) {
+void SplatStats::add(const SplatStats& o) {
+    traversal.add(o.traversal);
+    contributions += o.contributions;
+    visibilityRays += o.visibilityRays;
+    for (int i = 0; i < SegmentReceivers::kVerdictCount; ++i) refused[i] += o.refused[i];
+}
+
+SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray)
+    : accel_(accel), origin_(ray.origin),
+      originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {}
+
+SegmentReceivers::Verdict SegmentReceivers::judge(const Vec3& y, const Vec3& ng, uint64_t& rays) const {
+    // 1. In front of the surface the segment leaves.
+    if (hasOriginNormal_ && glm::dot(y - origin_, originNormal_) <= 0.f) return kBehindOrigin;
+    // 2. V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
+    const Vec3 lifted = y + surfaceEpsilon(y) * ng;
+    ++rays;
+    return accel_.occluded(lifted, origin_ - lifted, 1.f) ? kHidden : kReceives;
+}
+
+void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  Reporter& reporter, SplatStats* statsOut) {
     const GridGeometry& g = tree.geometry;
     const size_t pixels = film.pixelCount();
     const int threads = pool.size();
@@ -54,6 +81,7 @@ void splatPhotons(const Scene& scene, const OcclusionTree& tree, const EyeSample
             cyl.length = (ray.length + h) / g.voxelSize;  // a little past the hit (≈h)
             cyl.originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
             int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
+            const SegmentReceivers receivers(accel, ray);
 
             traverseCylinder(tree, samples, cyl, scratch[thread], [&](uint32_t i, float visibility) {
                 // Only samples in front of the ray's origin, inside the kernel, facing the photon.
@@ -68,6 +96,13 @@ void splatPhotons(const Scene& scene, const OcclusionTree& tree, const EyeSample
                 if (cosTheta >= 0.f) return;
                 Vec3 ng = decodeUnit(samples.geomNormal[i]);
                 if (glm::dot(ng, w) >= 0.f) return;
+                if (settings.visibility) {
+                    SegmentReceivers::Verdict verdict = receivers.judge(y, ng, st.visibilityRays);
+                    if (verdict != SegmentReceivers::kReceives) {
+                        ++st.refused[verdict];
+                        return;
+                    }
+                }
 
                 // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V.
                 SurfacePoint sp;
@@ -105,12 +140,8 @@ void splatPhotons(const Scene& scene, const OcclusionTree& tree, const EyeSample
                                        float(double(sum[2]) / kFixedScale));
         }
     }
-    if (statsOut) {
-        for (const SplatStats& s : stats) {
-            statsOut->traversal.add(s.traversal);
-            statsOut->contributions += s.contributions;
-        }
-    }
+    if (statsOut)
+        for (const SplatStats& s : stats) statsOut->add(s);
 }
 
 }  // namespace rs

@@ -186,7 +186,7 @@ TEST(SplatStage, ClosedRoomReflectsEmittedPowerTimesAlbedo) {
     ps.voxelSize = grid.geometry.voxelSize;
     PhotonMap photons = tracePhotons(s, accel, lights, ps, pool, silentReporter());
     Film film(1, 1);
-    splatPhotons(s, tree, eye, photons, film, pool, silentReporter());
+    splatPhotons(s, accel, tree, eye, photons, SplatSettings(), film, pool, silentReporter());
     double reflected = film.layers[kDirect][0].x * kPi;
     double expected = rho * luminance(s.emittedPower());
     EXPECT_NEAR(reflected / expected, 1.0, 0.05);
