@@ -2,6 +2,7 @@
 
 #include "bsdf.h"
 #include "camera.h"
+#include "direct.h"
 #include "sampling.h"
 
 namespace rs {
@@ -49,7 +50,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
         // Emitters: front face only; MIS against the light sampling of the previous vertex.
         if (m.isEmissive() && sp.frontFace) {
             float w = 1.f;
-            if (!prevDelta) w = powerHeuristic(prevPdf, lights.pdfLi(prevP, sp.tri, sp.p));
+            if (!prevDelta) w = emitterHitWeight(lights, prevPdf, prevP, sp);
             out.layer[cls.layerOfHit()] += beta * m.emission * w;
         }
 
@@ -71,24 +72,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
         if (!delta && !lights.empty()) {
             float uc = sampler.get1D();
             Vec2 ul = sampler.get2D();
-            LightSample ls = lights.sampleLi(sp.p, uc, ul);
-            if (ls.pdf > 0.f && !isBlack(ls.radiance)) {
-                Vec3 f = bsdf.eval(wo, ls.wi);
-                float cosI = std::abs(glm::dot(ls.wi, bsdf.shadingNormal()));
-                if (!isBlack(f) && cosI > 0.f) {
-                    // Aim from the offset origin at the light point itself: along ls.wi, the
-                    // offset would carry the ray through the light's plane before tmax when the
-                    // surface faces the light at low elevation, and the light would shadow itself.
-                    Vec3 origin = offsetRayOrigin(sp, ls.wi);
-                    bool visible = std::isfinite(ls.dist)
-                                       ? !accel.occluded(origin, sp.p + ls.wi * ls.dist - origin, 1.f - 1e-4f)
-                                       : !accel.occluded(origin, ls.wi, kInf);
-                    if (visible) {
-                        float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, bsdf.pdf(wo, ls.wi));
-                        out.layer[cls.layerOfArrival(true)] += beta * f * ls.radiance * (cosI * w / ls.pdf);
-                    }
-                }
-            }
+            out.layer[cls.layerOfArrival(true)] += beta * sampleLightDirect(accel, lights, sp, bsdf, wo, uc, ul);
         } else {
             sampler.get1D();  // keep the dimension count per depth fixed
             sampler.get2D();
