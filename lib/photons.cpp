@@ -22,6 +22,13 @@
 
 namespace rs {
 
+float PhotonRay::reachOf(float cosTheta) {
+    constexpr float kMaxReach = 16.f;  // θ up to 86.4°; beyond, grazing rays lose the rest
+    float c = std::abs(cosTheta);
+    if (!(c * kMaxReach > std::sqrt(std::max(0.f, 1.f - c * c)))) return kMaxReach;
+    return std::max(1.f, std::sqrt(std::max(0.f, 1.f - c * c)) / c);
+}
+
 const char* photonClassName(int c) {
     static const char* names[kPhotonClassCount] = {"direct", "indirect", "caustic"};
     return names[c];
@@ -79,6 +86,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
             r.length = t;
             r.flux = flux;
             r.originNormal = glm::dot(originNormal, originNormal) > 0.f ? encodeUnit(originNormal) : 0u;
+            r.reach = PhotonRay::reachOf(glm::dot(sp.ng, d));
             r.cls = depth == 0 ? kPhotonDirect : specularOnly ? kPhotonCaustic : kPhotonIndirect;
             r.density = collimated ? prefix * collimatedDensity : prefix * lastPdf / std::max(sqr(lengthSince), 1e-12f);
             r.radius = 0.f;

@@ -29,8 +29,13 @@ struct PhotonRay {
     Vec3 flux;          // W, already divided by the class's path count
     uint32_t originNormal;  // encodeUnit of the tangent plane's normal at x(i−1) (side of dir); 0: none
     float density;      // p⊥ of the photon at x(i) per path (1/m²), for the radius
+    float reach;        // how far past x(i) the kernel reaches, in radii: tan θ at x(i), clamped to [1, 16]
     uint8_t cls;        // PhotonClass
     uint8_t pad[3] = {0, 0, 0};  // no indeterminate bytes: photon arrays compare with memcmp
+
+    // A segment meeting a flat receiver at angle θ from its normal puts the parallel rays of
+    // its kernel disc down up to h·tan θ past x(i): the cylinder must reach that far.
+    static float reachOf(float cosTheta);
 };
 
 struct PhotonSettings {

@@ -78,7 +78,8 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
             cyl.origin = g.voxelFromWorld(o);
             cyl.dir = w;
             cyl.radius = h / g.voxelSize;
-            cyl.length = (ray.length + h) / g.voxelSize;  // a little past the hit (≈h)
+            const float end = ray.length + h * ray.reach;  // past the hit as far as the kernel lands
+            cyl.length = end / g.voxelSize;
             cyl.originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
             int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
             const SegmentReceivers receivers(accel, ray);
@@ -88,7 +89,7 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
                 Vec3 y = samples.position[i];
                 Vec3 oy = y - o;
                 float t = glm::dot(oy, w);
-                if (t <= 0.f) return;
+                if (t <= 0.f || t > end) return;
                 float d2 = glm::dot(oy, oy) - t * t;
                 if (d2 >= h2) return;
                 Vec3 n = decodeUnit(samples.normal[i]);

@@ -73,6 +73,7 @@ PhotonRay segment(Vec3 from, Vec3 to, float radius, Vec3 originNormal = Vec3(0.f
     r.dir = glm::normalize(to - from);
     r.length = glm::length(to - from);
     r.radius = radius;
+    r.reach = 16.f;  // the longest overrun past the end: the hardest case for the rules
     r.flux = Vec3(1.f);
     r.originNormal = glm::dot(originNormal, originNormal) > 0.f ? encodeUnit(originNormal) : 0u;
     r.cls = kPhotonIndirect;
