@@ -28,6 +28,9 @@ using namespace rs;
 namespace {
 
 // -- Console reporter: a progress bar on a TTY, plain lines otherwise, nothing with --quiet.
+// Stages may nest one level: the render's passes are the outer stage, each pass's stages
+// (eye pass, photons, splatting) the inner one; the bar then shows both, and only the
+// outer stage prints lines.
 class ConsoleReporter : public Reporter {
 public:
     explicit ConsoleReporter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO)) {}
@@ -45,40 +48,77 @@ public:
     }
     void begin(const std::string& stage, int64_t total, const char* unit) override {
         std::lock_guard<std::mutex> lock(mutex_);
-        stage_ = stage;
-        unit_ = unit;
-        total_ = std::max<int64_t>(total, 1);
-        done_ = 0;
-        shown_ = -1;
-        timer_ = Timer();
-        lastDraw_ = -1.0;
-        if (!quiet_ && !tty_) std::fprintf(stderr, "raysplat: %s: %lld %s\n", stage.c_str(), (long long)total, unit);
+        const bool nested = depth_ == 1;
+        depth_ = std::min(depth_ + 1, 2);
+        Progress& p = nested ? inner_ : outer_;
+        p.start(stage, total, unit);
+        if (nested) outer_.hasInner = true;
+        if (!quiet_ && !tty_ && !nested) {
+            if (total > 0) std::fprintf(stderr, "raysplat: %s: %lld %s\n", stage.c_str(), (long long)total, unit);
+            else std::fprintf(stderr, "raysplat: %s\n", stage.c_str());
+        }
     }
     void advance(int64_t units) override {
-        int64_t done = done_.fetch_add(units) + units;
-        if (quiet_ || !tty_) return;
         std::lock_guard<std::mutex> lock(mutex_);
-        double now = timer_.seconds();
-        if (now - lastDraw_ < 0.1 && done < total_) return;
+        Progress& p = depth_ == 2 ? inner_ : outer_;
+        p.done += units;
+        if (quiet_) return;
+        if (!tty_) {
+            if (depth_ == 1 && p.hasInner)  // a line per unit of work made of stages
+                std::fprintf(stderr, "raysplat: %s: pass %lld%s done, %.1f s\n", p.stage.c_str(), (long long)p.done,
+                             p.total > 0 ? fmtTotal(p.total).c_str() : "", p.timer.seconds());
+            return;
+        }
+        double now = outer_.timer.seconds();
+        if (now - lastDraw_ < 0.1 && p.done < p.total) return;
         lastDraw_ = now;
-        drawBar(done);
+        drawBar();
     }
     void end() override {
-        if (quiet_) return;
         std::lock_guard<std::mutex> lock(mutex_);
+        const bool nested = depth_ == 2;
+        depth_ = std::max(depth_ - 1, 0);
+        if (quiet_ || nested) return;
         clearBar();
-        std::fprintf(stderr, "raysplat: %s done in %.2f s\n", stage_.c_str(), timer_.seconds());
+        std::fprintf(stderr, "raysplat: %s done in %.2f s\n", outer_.stage.c_str(), outer_.timer.seconds());
     }
 
 private:
-    void drawBar(int64_t done) {
+    struct Progress {
+        std::string stage;
+        const char* unit = "";
+        int64_t total = 0, done = 0;  // total 0: open-ended (passes under a time limit)
+        bool hasInner = false;        // stages ran inside it
+        Timer timer;
+        void start(const std::string& s, int64_t t, const char* u) {
+            stage = s, unit = u, total = t, done = 0, hasInner = false, timer = Timer();
+        }
+        double fraction() const { return total > 0 ? std::min(1.0, double(done) / double(total)) : 0.0; }
+    };
+    static std::string fmtTotal(int64_t total) { return "/" + std::to_string(total); }
+
+    void drawBar() {
         const int width = 30;
-        double f = std::min(1.0, double(done) / double(total_));
-        int fill = int(f * width);
-        double eta = f > 0.0 ? timer_.seconds() * (1.0 - f) / f : 0.0;
-        std::fprintf(stderr, "\r\033[Kraysplat: %s [%.*s%*s] %3d%% %lld/%lld %s, %.1f s left", stage_.c_str(), fill,
-                     "##############################", width - fill, "", int(f * 100), (long long)done,
-                     (long long)total_, unit_, eta);
+        const Progress& o = outer_;
+        std::string line = "\r\033[Kraysplat: " + o.stage;
+        char buf[256];
+        if (o.total > 0) {
+            // The outer bar counts the current unit's inner progress as a fraction of one unit.
+            double f = std::min(1.0, (double(o.done) + (depth_ == 2 ? inner_.fraction() : 0.0)) / double(o.total));
+            int fill = int(f * width);
+            double eta = f > 0.0 ? o.timer.seconds() * (1.0 - f) / f : 0.0;
+            std::snprintf(buf, sizeof buf, " [%.*s%*s] %3d%% %lld/%lld %s, %.1f s left", fill,
+                          "##############################", width - fill, "", int(f * 100), (long long)o.done,
+                          (long long)o.total, o.unit, eta);
+        } else {
+            std::snprintf(buf, sizeof buf, " %lld %s, %.1f s", (long long)o.done, o.unit, o.timer.seconds());
+        }
+        line += buf;
+        if (depth_ == 2) {
+            std::snprintf(buf, sizeof buf, " · %s %3d%%", inner_.stage.c_str(), int(inner_.fraction() * 100));
+            line += buf;
+        }
+        std::fputs(line.c_str(), stderr);
         std::fflush(stderr);
         barShown_ = true;
     }
@@ -89,12 +129,8 @@ private:
 
     bool quiet_, tty_;
     std::mutex mutex_;
-    std::string stage_;
-    const char* unit_ = "";
-    int64_t total_ = 1;
-    std::atomic<int64_t> done_{0};
-    int64_t shown_ = -1;
-    Timer timer_;
+    int depth_ = 0;
+    Progress outer_, inner_;
     double lastDraw_ = -1.0;
     bool barShown_ = false;
 };
@@ -228,8 +264,10 @@ int cmdRender(int argc, char** argv) {
     Command cmd("raysplat render SCENE -o OUT.exr [options]",
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): eye pass, GPU voxelization (EGL), occlusion tree, photons, splatting, at the\n"
-                "paper's settings (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
+                "(Herzog & Seidel 2007): GPU voxelization (EGL) once, then passes of eye pass, occlusion tree,\n"
+                "photons and splatting, averaged, with kernels shrinking from pass to pass. Direct light is sampled\n"
+                "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
+                "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
                 "atomically: a failed run leaves no file behind.");
     cmd.add({"--output", "FILE", "OpenEXR output (also -o)", [&](const std::string& v) { cfg.output = v; }});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
@@ -245,10 +283,17 @@ int cmdRender(int argc, char** argv) {
                  cfg.spp = parseNumber<int>("--spp", v);
                  if (cfg.spp < 1) throw Error(ErrorKind::Config, "--spp " + v + " is out of range (1..1048576)");
              }});
+    cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
+             [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
+    cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 1)",
+             [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
     cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",
              [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});
-    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default 0.2,0.5,0.3)",
-             [&](const std::string& v) { parseTriple("--split", v, cfg.split); }});
+    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default 0,0.5,0.3; with --direct photons 0.2,0.5,0.3)",
+             [&](const std::string& v) {
+                 parseTriple("--split", v, cfg.split);
+                 cfg.splitSet = true;
+             }});
     cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,32,16)",
              [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
     cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,6,1)",
@@ -257,8 +302,12 @@ int cmdRender(int argc, char** argv) {
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
     cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
              [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
-    cmd.add({"--time-limit", "SECONDS", "render passes (path: of --spp; splat: of --photons) until the time is up, then average",
+    cmd.add({"--passes", "N", "passes to render and average (default 1; splat: each new eye samples and photons, path: --spp each)",
+             [&](const std::string& v) { cfg.passes = parseNumber<int>("--passes", v); }});
+    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
+    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default 0.667)",
+             [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
     cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
     cmd.add({"--seed", "N", "seed of every random sequence (default 0)", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: all cores); the image does not depend on it",

@@ -23,6 +23,19 @@ Method parseMethod(const std::string& name) {
     throw Error(ErrorKind::Config, "--method " + name + ": unknown method (splat, splat-novis, path)");
 }
 
+const char* directMethodName(DirectMethod d) { return d == DirectMethod::Sample ? "sample" : "photons"; }
+
+DirectMethod parseDirectMethod(const std::string& name) {
+    if (name == "sample") return DirectMethod::Sample;
+    if (name == "photons") return DirectMethod::Photons;
+    throw Error(ErrorKind::Config, "--direct " + name + ": unknown method (sample, photons)");
+}
+
+void RenderConfig::photonSplit(float out[3]) const {
+    for (int c = 0; c < 3; ++c) out[c] = split[c];
+    if (!splitSet && directBySampling()) out[0] = 0.f;
+}
+
 static void requireRange(const char* flag, double v, double lo, double hi) {
     if (!(v >= lo && v <= hi)) {
         char buf[256];
@@ -46,6 +59,15 @@ void RenderConfig::validate() const {
         splitSum += split[c];
     }
     if (!(splitSum > 0.0)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
+    if (splitSet && directBySampling() && split[0] > 0.f)
+        throw Error(ErrorKind::Config, "--split gives direct photons a share, but --direct sample (the default) computes "
+                                       "direct light by light sampling: use --split 0,I,C or --direct photons");
+    float used[3];
+    photonSplit(used);
+    if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
+    requireRange("--light-samples", lightSamples, 1, 4096);
+    requireRange("--passes", passes, 1, 1 << 20);
+    requireRange("--alpha", alpha, 0.01, 1);
     requireRange("--max-depth", maxDepth, 1, 1024);
     requireRange("--threads", threads, 0, 1024);
     requireRange("--time-limit", timeLimit, 0, 1e7);
@@ -99,11 +121,17 @@ ImageAttributes RenderConfig::attributes() const {
             {"maxDepth", std::to_string(maxDepth)},
             {"camera", camera.empty() ? "(first)" : camera},
             {"timeLimit", std::to_string(timeLimit)},
+            {"passes", std::to_string(passes)},
             {"grid", std::to_string(grid)},
             {"voxelizer", voxelizer}};
     if (splats()) {
+        float used[3];
+        photonSplit(used);
+        a["direct"] = directMethodName(direct);
+        if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
+        a["alpha"] = std::to_string(alpha);
         a["photons"] = std::to_string(photons);
-        a["split"] = triple(split);
+        a["split"] = triple(used);
         a["kernelPhotons"] = triple(kernelPhotons);
         a["radiusVoxels"] = triple(minRadius) + "/" + triple(maxRadius);
     }

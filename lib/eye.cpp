@@ -3,6 +3,7 @@
 #include "accel.h"
 #include "bsdf.h"
 #include "camera.h"
+#include "direct.h"
 #include "log.h"
 #include "parallel.h"
 #include "sampling.h"
@@ -96,8 +97,9 @@ bool reflectsNothing(const Material& m) {
 
 }  // namespace
 
-EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& camera, const EyePassSettings& st,
-                     ThreadPool& pool, Reporter& reporter) {
+EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
+                     const EyePassSettings& st, ThreadPool& pool, Reporter& reporter) {
+    const bool direct = st.directSamples > 0 && lights && !lights->empty();
     EyePass out;
     out.film = Film(st.width, st.height);
     CameraRays rays(camera, st.width, st.height);
@@ -113,8 +115,9 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& ca
                 uint32_t pixel = uint32_t(y * st.width + x);
                 uint64_t scramble = hashKey(st.seed, Stage::Camera, pixel);
                 for (int s = 0; s < st.spp; ++s) {
-                    Vec2 jitter = sobol2D(uint32_t(s), scramble);
-                    Sampler sampler(st.seed, Stage::Eye, (uint64_t(pixel) << 24) ^ uint64_t(s));
+                    const uint32_t index = uint32_t(st.firstSample + s);
+                    Vec2 jitter = sobol2D(index, scramble);
+                    Sampler sampler(st.seed, Stage::Eye, (uint64_t(pixel) << 24) ^ uint64_t(index));
                     Vec3 o = rays.origin(), d = rays.direction(Vec2(float(x), float(y)) + jitter);
                     Vec3 weight(invSpp);
 
@@ -139,6 +142,13 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& ca
                             row.uv.push_back(sp.uv);
                             row.pixel.push_back(pixel);
                             row.weight.push_back(weight);
+                            if (direct) {
+                                const uint64_t key = (uint64_t(pixel) << 24) ^ uint64_t(index);
+                                Sampler ds(st.seed, Stage::Direct, key);
+                                Vec3 l = estimateDirect(accel, *lights, sp, bsdf, wo, st.directSamples,
+                                                        hashKey(st.seed, Stage::Direct, key, 1), ds);
+                                if (isFinite(l)) out.film.layers[kDirect][pixel] += weight * l;
+                            }
                             break;
                         }
                         float uLobe = sampler.get1D();

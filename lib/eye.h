@@ -1,7 +1,8 @@
 // Eye pass (DESIGN §4): camera rays traced with Embree; S stratified samples a pixel;
 // directly seen emitters go to the film's emission layer; specular chains (glass, mirror)
 // are followed with Fresnel-chosen branches; at the first non-specular hit an eye sample is
-// stored. Eye samples are the only places where photon energy lands (DESIGN §9).
+// stored. Eye samples are the only places where photon energy lands (DESIGN §9). With direct
+// light by sampling, each eye sample also estimates its direct light there (direct.h).
 #pragma once
 
 #include <cstdint>
@@ -40,6 +41,7 @@ struct EyeSamples {
 
 
 class RayAccel;
+class LightSampler;
 struct Camera;
 struct Scene;
 class ThreadPool;
@@ -48,16 +50,21 @@ class Reporter;
 struct EyePassSettings {
     int width = 500, height = 500;
     int spp = 4;              // S: stratified camera samples a pixel (paper: 500×500×4)
+    int firstSample = 0;      // this pass's samples are [firstSample, firstSample + S) of each pixel's sequence
     int maxSpecularDepth = 16;  // longest specular chain followed
+    int directSamples = 0;    // > 0: direct light at every eye sample, by that many light samples
     uint64_t seed = 0;
 };
 
 struct EyePass {
     EyeSamples samples;  // in pixel order, then sample order
-    Film film;           // emission layer (emitters seen through specular chains), albedo, normal
+    // Emission layer (emitters seen through specular chains), albedo, normal, and with
+    // directSamples the direct layer (light sampling at each eye sample, weighted by it).
+    Film film;
 };
 
-EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const Camera& camera, const EyePassSettings& settings,
-                     ThreadPool& pool, Reporter& reporter);
+// `lights` is needed only with settings.directSamples > 0.
+EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
+                     const EyePassSettings& settings, ThreadPool& pool, Reporter& reporter);
 
 }  // namespace rs

@@ -8,7 +8,8 @@
 // a photon near x(i): the light's choice probability × the solid-angle pdf of the last sampled
 // direction / the squared length since that vertex (specular bounces keep the pdf and add
 // length), × the Russian-roulette survival of the path so far. Collimated (directional)
-// light has p⊥ = choice / (π r²) of its emission disc. Clamped to [min, max] voxels.
+// light has p⊥ = choice / (π r²) of its emission disc. Clamped to [min, max] voxels, then
+// scaled by the pass's shrinkage (the clamps shrink with the kernels).
 #include "photons.h"
 
 #include "accel.h"
@@ -217,7 +218,7 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
         double n = double(map.pathsFor[r.cls]);
         r.flux = Vec3(DVec3(r.flux) / n);
         float h = std::sqrt(st.k[r.cls] / (kPi * float(n) * std::max(r.density, 1e-30f)));
-        r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize);
+        r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize) * st.radiusScale;
     }
     return map;
 }

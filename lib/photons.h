@@ -48,6 +48,7 @@ struct PhotonSettings {
     int maxDepth = 32;                       // segments a path
     uint64_t seed = 0;
     uint64_t firstPath = 0;                  // sequence offset (progressive passes)
+    float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
     int64_t maxPaths = 0;                    // 0: 50 × photons
 };
 

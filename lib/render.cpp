@@ -1,7 +1,8 @@
 // The pipeline, in order (DESIGN §1):
 //   scene → Embree BVH + light sampler
-//   splat methods: eye pass → occlusion grid (voxelizer or cache) → occlusion tree →
-//                  passes of (photon tracing → splatting) → film
+//   splat methods: occlusion grid (voxelizer or cache), then passes of
+//                  (eye pass [+ direct light by sampling] → occlusion tree → photon tracing
+//                  → splatting) → film, the passes averaged
 //   path:          passes of path tracing → film
 // Stages take their inputs as const& and return their outputs by value; only this file
 // knows the order. Every stage's wall time and counts go to Stats (--stats-json, EXR header).
@@ -31,25 +32,37 @@ namespace {
 
 constexpr double kMB = 1024.0 * 1024.0;
 
-// Progressive rendering: passes until the time limit (at least one), averaged. The time goes
-// to `stage` when given (else the pass records its own stages).
+// Progressive rendering: cfg.passes passes, or with a time limit as many as fit (at least
+// one), averaged with equal weights. Each pass reports as one unit of the "rendering"
+// progress when there is more than one.
 template <class RenderPass>
-Film renderPasses(int width, int height, double timeLimit, Stats& stats, const char* stage, RenderPass&& pass,
-                  int& passes) {
+Film renderPasses(const RenderConfig& cfg, int width, int height, Reporter& reporter, Stats& stats, RenderPass&& pass) {
     Timer t;
     Film sum(width, height);
-    passes = 0;
+    const bool timed = cfg.timeLimit > 0.0;
+    const bool several = timed || cfg.passes > 1;
+    if (several) reporter.begin("rendering", timed ? 0 : cfg.passes, "passes");
+    int passes = 0;
     double longest = 0.0;
-    do {
+    for (;;) {
         Timer one;
         sum.add(pass(passes));
         ++passes;
         longest = std::max(longest, one.seconds());
-    } while (timeLimit > 0.0 && t.seconds() + longest <= timeLimit);
+        if (several) reporter.advance(1);
+        if (timed ? t.seconds() + longest > cfg.timeLimit : passes >= cfg.passes) break;
+    }
+    if (several) reporter.end();
     sum.scale(1.f / float(passes));
-    if (stage) stats.addTime(stage, t.seconds());
     stats.setCount("passes", passes);
     return sum;
+}
+
+// The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …
+float passRadiusScale(int p, float alpha) {
+    double r2 = 1.0;
+    for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
+    return float(std::sqrt(r2));
 }
 
 Film renderPath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
@@ -57,95 +70,108 @@ Film renderPath(const Scene& scene, const RayAccel& accel, const LightSampler& l
     const int spp = cfg.samplesPerPixel();
     int passes = 0;
     Timer t;
-    Film film = renderPasses(width, height, cfg.timeLimit, stats, "render", [&](int pass) {
+    Film film = renderPasses(cfg, width, height, reporter, stats, [&](int pass) {
+        passes = pass + 1;
         return renderPathPass(scene, accel, lights, camera, width, height, cfg, {pass * spp, spp}, pool, reporter);
-    }, passes);
+    });
+    stats.addTime("render", t.seconds());
     stats.setCount("samples_per_pixel", double(passes) * spp);
     stats.setCount("paths_per_second", double(width) * height * passes * spp / std::max(t.seconds(), 1e-9));
     return film;
 }
 
+PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
+    PhotonSettings ps;
+    ps.photons = cfg.photons;
+    cfg.photonSplit(ps.split);
+    for (int c = 0; c < kPhotonClassCount; ++c) {
+        ps.k[c] = cfg.kernelPhotons[c];
+        ps.minRadius[c] = cfg.minRadius[c];
+        ps.maxRadius[c] = cfg.maxRadius[c];
+    }
+    ps.voxelSize = voxelSize;
+    ps.maxDepth = cfg.maxDepth;
+    ps.seed = cfg.seed;
+    return ps;
+}
+
+// Counts a pass's tree and splat add to Stats: the last pass's sizes, every pass's work.
+struct SplatTotals {
+    SplatStats splat;
+    int64_t photonsStored = 0;
+    double photonMb = 0.0, eyeMb = 0.0, treeMb = 0.0;
+};
+
 Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
                  int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats,
                  StagedFiles* outputs) {
-    // Eye pass: where photon energy can land (DESIGN §4).
-    Timer t;
+    // The occlusion grid, once (DESIGN §5–6). Without visibility the tree indexes the eye
+    // samples over an empty grid: nothing occludes.
+    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats, outputs);
+    if (cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
+
     EyePassSettings es;
     es.width = width;
     es.height = height;
     es.spp = cfg.samplesPerPixel();
     es.maxSpecularDepth = cfg.maxDepth;
+    es.directSamples = cfg.directBySampling() ? cfg.lightSamples : 0;
     es.seed = cfg.seed;
-    EyePass eye = traceEyePass(scene, accel, camera, es, pool, reporter);
-    stats.addTime("eye", t.seconds());
-    stats.setCount("eye_samples", double(eye.samples.size()));
-    stats.setCount("eye_samples_mb", eye.samples.bytes() / kMB);
-
-    // Occlusion grid and the tree over it (DESIGN §5–7). Without visibility the tree indexes
-    // the eye samples over an empty grid: nothing occludes.
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats, outputs);
-    t = Timer();
-    OcclusionTreeStats ts;
-    OcclusionTree tree = buildOcclusionTree(cfg.method == Method::SplatNoVis ? OcclusionGrid(grid.geometry) : grid,
-                                            eye.samples, pool, &ts);
-    grid = OcclusionGrid();  // the tree holds what the splat needs
-    stats.addTime("tree", t.seconds());
-    stats.setCount("tree_nodes", double(ts.nodes));
-    stats.setCount("tree_nodes_empty", double(ts.empty));
-    stats.setCount("tree_nodes_split", double(ts.split));
-    stats.setCount("tree_nodes_occlusion", double(ts.occlusion));
-    stats.setCount("tree_nodes_visible", double(ts.visible));
-    stats.setCount("tree_depth", double(ts.depth));
-    stats.setCount("tree_mb", ts.bytes / kMB);
-    if (ts.samplesOutside > 0)
-        reporter.warn(scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
-
-    // Photons and splatting, in passes of fresh sequence ranges (DESIGN §8–9).
-    PhotonSettings ps;
-    ps.photons = cfg.photons;
-    for (int c = 0; c < kPhotonClassCount; ++c) {
-        ps.split[c] = cfg.split[c];
-        ps.k[c] = cfg.kernelPhotons[c];
-        ps.minRadius[c] = cfg.minRadius[c];
-        ps.maxRadius[c] = cfg.maxRadius[c];
-    }
-    ps.voxelSize = tree.geometry.voxelSize;
-    ps.maxDepth = cfg.maxDepth;
-    ps.seed = cfg.seed;
+    PhotonSettings ps = photonSettings(cfg, grid.geometry.voxelSize);
     SplatSettings splat;
     splat.visibility = cfg.method == Method::Splat;
-    double photonMb = 0.0;
-    int64_t stored = 0;
-    SplatStats ss;
-    int passes = 0;
-    Film light = renderPasses(width, height, cfg.timeLimit, stats, nullptr, [&](int pass) {
-        Timer tp;
-        ps.firstPath = uint64_t(pass) << 40;
+    SplatTotals totals;
+
+    // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
+    // new photons (a fresh range of paths) with shrunk kernels, splatted (DESIGN §4, §7–9).
+    return renderPasses(cfg, width, height, reporter, stats, [&](int pass) {
+        Timer t;
+        es.firstSample = pass * es.spp;
+        EyePass eye = traceEyePass(scene, accel, &lights, camera, es, pool, reporter);
+        stats.addTime("eye", t.seconds());
+        stats.setCount("eye_samples", double(eye.samples.size()));
+        stats.setCount("eye_samples_mb", eye.samples.bytes() / kMB);
+
+        t = Timer();
+        OcclusionTreeStats ts;
+        OcclusionTree tree = buildOcclusionTree(grid, eye.samples, pool, &ts);
+        stats.addTime("tree", t.seconds());
+        stats.setCount("tree_nodes", double(ts.nodes));
+        stats.setCount("tree_nodes_empty", double(ts.empty));
+        stats.setCount("tree_nodes_split", double(ts.split));
+        stats.setCount("tree_nodes_occlusion", double(ts.occlusion));
+        stats.setCount("tree_nodes_visible", double(ts.visible));
+        stats.setCount("tree_depth", double(ts.depth));
+        stats.setCount("tree_mb", ts.bytes / kMB);
+        if (pass == 0 && ts.samplesOutside > 0)
+            reporter.warn(scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
+
+        t = Timer();
+        ps.firstPath = uint64_t(pass) << 40;  // 2^40 paths a pass: ranges never overlap
+        ps.radiusScale = passRadiusScale(pass, cfg.alpha);
         PhotonMap photons = tracePhotons(scene, accel, lights, ps, pool, reporter);
-        stats.addTime("photons", tp.seconds());
-        stored += int64_t(photons.rays.size());
-        photonMb = std::max(photonMb, photons.bytes() / kMB);
+        stats.addTime("photons", t.seconds());
+        totals.photonsStored += int64_t(photons.rays.size());
+        totals.photonMb = std::max(totals.photonMb, photons.bytes() / kMB);
         for (int c = 0; c < kPhotonClassCount; ++c)
             stats.setCount(std::string("photons_") + photonClassName(c), double(photons.count[c]));
         stats.setCount("photon_paths", double(photons.pathsTraced));
-        Timer tsplat;
-        Film f(width, height);
-        splatPhotons(scene, accel, tree, eye.samples, photons, splat, f, pool, reporter, &ss);
-        stats.addTime("splat", tsplat.seconds());
-        return f;
-    }, passes);
-    stats.setCount("photon_mb", photonMb);
-    stats.setCount("photons_stored", double(stored));
-    stats.setCount("splat_contributions", double(ss.contributions));
-    stats.setCount("traversal_nodes", double(ss.traversal.nodes));
-    stats.setCount("splat_visibility_rays", double(ss.visibilityRays));
-    stats.setCount("splat_refused_behind_origin", double(ss.refused[SegmentReceivers::kBehindOrigin]));
-    stats.setCount("splat_refused_hidden", double(ss.refused[SegmentReceivers::kHidden]));
 
-    // The film: emission, albedo and normal from the eye pass, the rest from the photons.
-    for (int l = 0; l < kLayerCount; ++l)
-        if (l != kEmission) eye.film.layers[l] = std::move(light.layers[l]);
-    return std::move(eye.film);
+        // The light lands in the eye pass's film: emission, albedo, normal and (sampled)
+        // direct light are already there.
+        t = Timer();
+        splatPhotons(scene, accel, tree, eye.samples, photons, splat, eye.film, pool, reporter, &totals.splat);
+        stats.addTime("splat", t.seconds());
+        stats.setCount("photon_mb", totals.photonMb);
+        stats.setCount("photons_stored", double(totals.photonsStored));
+        stats.setCount("radius_scale", ps.radiusScale);
+        stats.setCount("splat_contributions", double(totals.splat.contributions));
+        stats.setCount("traversal_nodes", double(totals.splat.traversal.nodes));
+        stats.setCount("splat_visibility_rays", double(totals.splat.visibilityRays));
+        stats.setCount("splat_refused_behind_origin", double(totals.splat.refused[SegmentReceivers::kBehindOrigin]));
+        stats.setCount("splat_refused_hidden", double(totals.splat.refused[SegmentReceivers::kHidden]));
+        return std::move(eye.film);
+    });
 }
 
 }  // namespace

@@ -252,6 +252,12 @@ def bad_setting_tests():
         case("--width 100000", ["--width", "100000", "--spp", "1"], "--width"),
         case("--threads -1", ["--threads", "-1", "--width", "16", "--spp", "1"], "--threads"),
         case("unknown option", ["--bogus-option", "--width", "16"], "--bogus-option"),
+        case("--direct bogus", ["--direct", "bogus", "--width", "16"], "--direct", "bogus"),
+        case("direct photons with --direct sample", ["--split", "0.2,0.5,0.3", "--width", "16"],
+             "--split", "--direct sample"),
+        case("--passes 0", ["--passes", "0", "--width", "16"], "--passes"),
+        case("--alpha 2", ["--alpha", "2", "--width", "16"], "--alpha"),
+        case("--light-samples 0", ["--light-samples", "0", "--width", "16"], "--light-samples"),
         case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
         # --quiet: these runs fail only when they write, after the progress lines of the render.
         # DESIGN §10: a failed run leaves no output, so neither may the outputs written

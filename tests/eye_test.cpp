@@ -52,7 +52,7 @@ TEST(EyePass, DiffuseWallGetsSSamplesPerPixelOnItsSurface) {
     st.width = 16;
     st.height = 12;
     st.spp = 4;
-    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
+    EyePass eye = traceEyePass(s, accel, nullptr, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
     ASSERT_EQ(eye.samples.size(), size_t(16 * 12 * 4));
     std::vector<int> perPixel(16 * 12, 0);
     for (size_t i = 0; i < eye.samples.size(); ++i) {
@@ -79,7 +79,7 @@ TEST(EyePass, SamplesOfAPixelAreStratified) {
     st.width = st.height = 8;
     st.spp = 4;
     Camera cam = lookingDownZ({0, 0, 2}, 0.5f);
-    EyePass eye = traceEyePass(s, accel, cam, st, pool, silentReporter());
+    EyePass eye = traceEyePass(s, accel, nullptr, cam, st, pool, silentReporter());
     float tanHalf = std::tan(0.25f);
     for (size_t p = 0; p < 64; ++p) {
         int quadrants = 0;
@@ -109,7 +109,7 @@ TEST(EyePass, GlassSlabPassesTheFresnelFractionWithUnitWeight) {
     EyePassSettings st;
     st.width = st.height = 64;
     st.spp = 4;
-    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}, 0.05f), st, pool, silentReporter());
+    EyePass eye = traceEyePass(s, accel, nullptr, lookingDownZ({0, 0, 2}, 0.05f), st, pool, silentReporter());
     double weight = 0;
     for (size_t i = 0; i < eye.samples.size(); ++i) {
         EXPECT_NEAR(eye.samples.position[i].z, -3.f, 1e-4f);
@@ -131,7 +131,7 @@ TEST(EyePass, DirectlySeenEmitterGoesToTheEmissionLayer) {
     ThreadPool pool(1);
     EyePassSettings st;
     st.width = st.height = 4;
-    EyePass eye = traceEyePass(s, accel, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
+    EyePass eye = traceEyePass(s, accel, nullptr, lookingDownZ({0, 0, 2}), st, pool, silentReporter());
     EXPECT_EQ(eye.samples.size(), 0u);
     for (size_t p = 0; p < 16; ++p) {
         Vec3 e = eye.film.layers[kEmission][p];
@@ -149,8 +149,8 @@ TEST(EyePass, ThreadCountDoesNotChangeSamples) {
     EyePassSettings st;
     st.width = st.height = 48;
     ThreadPool one(1), two(2);
-    EyePass a = traceEyePass(scene, accel, scene.camera(), st, one, silentReporter());
-    EyePass b = traceEyePass(scene, accel, scene.camera(), st, two, silentReporter());
+    EyePass a = traceEyePass(scene, accel, nullptr, scene.camera(), st, one, silentReporter());
+    EyePass b = traceEyePass(scene, accel, nullptr, scene.camera(), st, two, silentReporter());
     ASSERT_EQ(a.samples.size(), b.samples.size());
     EXPECT_EQ(0, std::memcmp(a.samples.position.data(), b.samples.position.data(), a.samples.size() * sizeof(Vec3)));
     EXPECT_EQ(a.samples.pixel, b.samples.pixel);

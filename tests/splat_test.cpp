@@ -70,7 +70,9 @@ TEST(SplatRenderer, PointLightIrradianceOnDiffusePlane) {
     Scene s = litFloor(false);
     RenderConfig cfg = splatConfig(48);
     cfg.photons = 200000;
+    cfg.direct = DirectMethod::Photons;  // the paper's direct light, from photons
     cfg.split[0] = 1.f, cfg.split[1] = 0.f, cfg.split[2] = 0.f;
+    cfg.splitSet = true;
     RenderResult r = render(s, cfg, silentReporter());
     double sumRatio = 0.0, sumSqErr = 0.0;
     int n = 0;
@@ -99,7 +101,9 @@ TEST(SplatRenderer, ShadowEdgeStaysSharpButLeaksWithoutVisibility) {
     RenderConfig cfg = splatConfig(w);
     cfg.grid = 128;
     cfg.photons = 100000;
+    cfg.direct = DirectMethod::Photons;  // the paper's direct light, from photons
     cfg.split[0] = 1.f, cfg.split[1] = 0.f, cfg.split[2] = 0.f;
+    cfg.splitSet = true;
     cfg.kernelPhotons[0] = 256.f;  // a wide kernel: h ≈ 0.25 m, six pixels
     RenderResult splat = render(s, cfg, silentReporter());
     cfg.method = Method::SplatNoVis;
