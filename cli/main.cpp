@@ -285,7 +285,7 @@ int cmdRender(int argc, char** argv) {
              }});
     cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
              [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
-    cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 1)",
+    cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 8)",
              [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
     cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",
              [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});

@@ -49,8 +49,10 @@ struct RenderConfig {
     // under a kernel (k) and the radius clamps in voxels, per class.
     DirectMethod direct = DirectMethod::Sample;
     // Light samples (and as many BSDF samples) per eye sample for direct light by sampling;
-    // punctual lights need one.
-    int lightSamples = 1;
+    // punctual lights need one. Measured on the Cornell box at 128 px: direct rel. MSE 0.0093
+    // with 1, 0.0029 with 2, 0.00084 with 4, 0.00044 with 8, at the same total time; at 500 px
+    // 8 samples cost 1.05 s of eye pass against 0.25 s for 1 (a pass takes about 17 s).
+    int lightSamples = 8;
     int64_t photons = 100000;
     // The split as given; photonSplit() is what the render uses: unless set, direct light by
     // sampling traces no direct photons (the paper's 0.5 : 0.3 for the others).
