@@ -13,6 +13,10 @@
   two_rooms_gap.gltf       the same rooms joined by a 25 cm wide opening in
                            the shared wall: light reaches the camera's room
                            only through it
+  caustic_pool.gltf        a closed room split at mid-height by a sheet of
+                           wavy glass (a pool's surface), a small light above
+                           it, the camera below: everything it sees is lit
+                           through the glass (caustics)
 
 Usage:  python3 scripts/make_scenes.py [outdir]
 
@@ -528,13 +532,94 @@ def two_rooms(outdir, gap):
     return g
 
 
+def wavy_sheet(half, y0, thickness, amplitude, waves, n):
+    """Closed glass sheet over [-half, half]^2: flat bottom at y0, wavy top
+    around y0 + thickness (sum of two sine waves), sides; smooth normals on
+    the top, outward everywhere."""
+    def height(x, z):
+        return (y0 + thickness + amplitude * (
+            math.sin(waves * x + 0.4) * math.cos(0.8 * waves * z)
+            + 0.5 * math.sin(1.7 * waves * (x + z))))
+
+    def normal(x, z):
+        e = 1e-4
+        dx = (height(x + e, z) - height(x - e, z)) / (2 * e)
+        dz = (height(x, z + e) - height(x, z - e)) / (2 * e)
+        return normalize((-dx, 1.0, -dz))
+
+    step = 2.0 * half / n
+    pos, nrm, idx = [], [], []
+    for i in range(n + 1):
+        for j in range(n + 1):
+            x, z = -half + i * step, -half + j * step
+            pos.append((x, height(x, z), z))
+            nrm.append(normal(x, z))
+    for i in range(n):
+        for j in range(n):
+            a, b = i * (n + 1) + j, (i + 1) * (n + 1) + j
+            idx += [a, a + 1, b + 1, a, b + 1, b]  # counter-clockwise seen from +y
+    top = (pos, nrm, idx)
+    bottom = rect((0, y0, 0), mul(X, half), mul(Z, half), mul(Y, -1))
+    sides = []
+    for axis, sign in ((0, 1.0), (0, -1.0), (2, 1.0), (2, -1.0)):
+        # A strip from the flat bottom up to the wavy edge, outward normal.
+        spos, snrm, sidx = [], [], []
+        outward = tuple(sign if k == axis else 0.0 for k in range(3))
+        for k in range(n + 1):
+            t = -half + k * step
+            x, z = (sign * half, t) if axis == 0 else (t, sign * half)
+            spos += [(x, y0, z), (x, height(x, z), z)]
+            snrm += [outward, outward]
+        for k in range(n):
+            a = 2 * k
+            quad = [a, a + 2, a + 3, a, a + 3, a + 1]
+            # Wind counter-clockwise around the outward normal.
+            p0, p1, p2 = spos[quad[0]], spos[quad[1]], spos[quad[2]]
+            if dot(cross(sub(p1, p0), sub(p2, p0)), outward) < 0:
+                quad = [a, a + 3, a + 2, a, a + 1, a + 3]
+            sidx += quad
+        sides.append((spos, snrm, sidx))
+    return merge(top, bottom, *sides)
+
+
+def caustic_pool(outdir):
+    g = GltfBuilder("caustic_pool")
+    white = g.material("white", WHITE)
+    tiles = g.material("pool_floor", (0.35, 0.6, 0.7))
+    light = g.material("light", (0.0, 0.0, 0.0), emissive=(1.0, 0.95, 0.85),
+                       strength=200.0)
+    water = g.material("water", (1.0, 1.0, 1.0), metallic=0.0, roughness=0.0,
+                       transmission=1.0, ior=1.33)
+    walls = [  # a closed 2 x 2 x 2 m room, normals inwards
+        ("floor", (0, 0, 0), X, Z, Y, tiles),
+        ("ceiling", (0, 2, 0), X, Z, mul(Y, -1), white),
+        ("back_wall", (0, 1, -1), X, Y, Z, white),
+        ("front_wall", (0, 1, 1), X, Y, mul(Z, -1), white),
+        ("left_wall", (-1, 1, 0), Y, Z, X, white),
+        ("right_wall", (1, 1, 0), Y, Z, mul(X, -1), white),
+    ]
+    for name, c, u, v, n, m in walls:
+        g.node(name, mesh=g.mesh(name, rect(c, mul(u, 1.0), mul(v, 1.0), n),
+                                 m))
+    # The sheet spans the room wall to wall: the light sees nothing below it
+    # but through the glass.
+    g.node("water_sheet", mesh=g.mesh(
+        "water_sheet", wavy_sheet(1.0, 1.2, 0.05, 0.012, 16.0, 64), water))
+    g.node("light", mesh=g.mesh("light", rect(
+        (0.2, 1.98, -0.1), mul(X, 0.08), mul(Z, 0.08), mul(Y, -1)), light))
+    g.camera("camera", eye=(0.0, 1.0, 0.95), target=(0.0, 0.0, -0.2),
+             yfov=1.1, aspect=1.0)
+    g.write_gltf(os.path.join(outdir, "caustic_pool.gltf"))
+    return g
+
+
 def main(argv):
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
     os.makedirs(outdir, exist_ok=True)
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
-                  lambda d: two_rooms(d, gap=True)):
+                  lambda d: two_rooms(d, gap=True), caustic_pool):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n
