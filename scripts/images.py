@@ -11,6 +11,8 @@ import os
 import numpy as np
 
 LAYERS = ("beauty", "direct", "indirect", "caustic", "emission")
+# Below this peak reference luminance FLIP's exposure range is empty (start > stop exposure).
+FLIP_MIN_LUMINANCE = 1e-6
 
 
 def read_layers(path):
@@ -67,8 +69,15 @@ def rmse(a, ref):
 
 
 def flip(a, ref):
-    """Mean HDR-FLIP error (0 = identical) and the per-pixel error map."""
+    """Mean HDR-FLIP error (0 = identical) and the per-pixel error map.
+
+    NaN (and a NaN map) when the reference is black or nearly so: FLIP derives its exposure
+    range from the reference and aborts the whole process (no exception) when it is empty.
+    """
     import flip_evaluator
+    lum = np.clip(ref, 0, None).astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722])
+    if not np.isfinite(lum).all() or lum.max() < FLIP_MIN_LUMINANCE:
+        return float("nan"), np.full(a.shape[:2], np.nan)
     emap, mean, _ = flip_evaluator.evaluate(np.clip(ref, 0, None).astype(np.float32),
                                             np.clip(a, 0, None).astype(np.float32), "HDR",
                                             applyMagma=False)

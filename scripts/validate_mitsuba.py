@@ -47,6 +47,13 @@ def mitsuba():
         for v in ("llvm_ad_rgb", "scalar_rgb"):
             try:
                 mi.set_variant(v)
+                if v.startswith("llvm"):
+                    # Dr.Jit loads whichever libLLVM it finds; before 16 it aborts the whole
+                    # process ("Cannot select: fmaximum") on real scenes, which no try catches.
+                    import drjit
+                    version = tuple(drjit.detail.llvm_version())
+                    if version < (16,):
+                        raise RuntimeError(f"libLLVM {'.'.join(map(str, version))} is older than 16")
                 mi.render(mi.load_dict({"type": "scene", "i": {"type": "path"}, "s": {"type": "perspective",
                                         "film": {"type": "hdrfilm", "width": 2, "height": 2}}}), spp=1)
                 _variant = v
@@ -116,9 +123,17 @@ def validate(binary, scene, outdir, size, reference_spp, mitsuba_spp):
         "mean_mitsuba": theirs.mean(axis=(0, 1)).tolist(),
         "flip": images.flip(ours, theirs)[0],
     }
-    result["ratio"] = result["rel_mse"] / max(result["noise"], 1e-30)
-    result["block_ratio"] = result["block_rel_mse"] / max(block_noise, 1e-30)
-    result["agrees"] = result["block_ratio"] <= AGREE_RATIO
+    # A sealed room seen from inside is black: both renders all zeros, noise and error 0, and
+    # the ratios 0/0. Agreement then means that both are black.
+    result["max_ours"], result["max_mitsuba"] = float(np.max(ours)), float(np.max(theirs))
+    result["black"] = result["max_ours"] <= 0 and result["max_mitsuba"] <= 0
+    if result["black"]:
+        result["ratio"] = result["block_ratio"] = float("nan")
+        result["agrees"] = True
+    else:
+        result["ratio"] = ratio(result["rel_mse"], result["noise"])
+        result["block_ratio"] = ratio(result["block_rel_mse"], block_noise)
+        result["agrees"] = result["block_ratio"] <= AGREE_RATIO
     result["mitsuba_seconds"] = sum(w for w in walls if w is not None) if all(w is not None for w in walls) else None
 
     # Picture: raysplat | Mitsuba | relative difference of 8×8 block means (black 0, bright ≥ 10 %).
@@ -131,6 +146,26 @@ def validate(binary, scene, outdir, size, reference_spp, mitsuba_spp):
     return result
 
 
+def ratio(err, noise):
+    """err / noise; infinite when there is an error but no noise to explain it."""
+    if noise > 0:
+        return err / noise
+    return 0.0 if err == 0 else float("inf")
+
+
+def fmt(x, spec):
+    """x formatted by spec, or '–' when it is NaN or None (FLIP of a black reference)."""
+    return "–" if x is None or x != x else format(x, spec)
+
+
+def verdict(r):
+    if r.get("black"):
+        return "black in both"
+    if r.get("max_ours", 1) <= 0 or r.get("max_mitsuba", 1) <= 0:
+        return "differ (" + ("raysplat" if r["max_ours"] <= 0 else "Mitsuba") + " black, the other not)"
+    return "agree within noise" if r["agrees"] else "differ"
+
+
 def data_scenes():
     return sorted(glob.glob(os.path.join(studyutil.ROOT, "data", "*.gltf")) +
                   glob.glob(os.path.join(studyutil.ROOT, "data", "*.glb")))
@@ -140,10 +175,14 @@ def markdown(results):
     lines = ["| Scene | Mitsuba / raysplat mean RGB | relMSE (noise) | ratio | 8×8 blocks: relMSE (noise) | ratio | FLIP | verdict |",
              "|---|---|---|---|---|---|---|---|"]
     for r in results:
-        ratio_of_means = " ".join(f"{m / o:.3f}" if o > 0 else "–" for m, o in zip(r["mean_mitsuba"], r["mean_ours"]))
-        lines.append(f"| {r['scene']} | {ratio_of_means} | {r['rel_mse']:.2e} ({r['noise']:.2e}) | {r['ratio']:.2f} "
-                     f"| {r['block_rel_mse']:.2e} ({r['block_noise']:.2e}) | {r['block_ratio']:.2f} "
-                     f"| {r['flip']:.3f} | {'agree within noise' if r['agrees'] else 'differ'} |")
+        if r.get("black"):
+            ratio_of_means = "0 / 0"
+        else:
+            ratio_of_means = " ".join(f"{m / o:.3f}" if o > 0 else ("–" if m == 0 else "∞")
+                                      for m, o in zip(r["mean_mitsuba"], r["mean_ours"]))
+        lines.append(f"| {r['scene']} | {ratio_of_means} | {r['rel_mse']:.2e} ({r['noise']:.2e}) "
+                     f"| {fmt(r['ratio'], '.2f')} | {r['block_rel_mse']:.2e} ({r['block_noise']:.2e}) "
+                     f"| {fmt(r['block_ratio'], '.2f')} | {fmt(r['flip'], '.3f')} | {verdict(r)} |")
     return "\n".join(lines)
 
 
