@@ -264,7 +264,7 @@ int cmdRender(int argc, char** argv) {
     Command cmd("raysplat render SCENE -o OUT.exr [options]",
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): GPU voxelization (EGL) once, then passes of eye pass, occlusion tree,\n"
+                "(Herzog & Seidel 2007): GPU voxelization (EGL) once, then 8 passes of eye pass, occlusion tree,\n"
                 "photons and splatting, averaged, with kernels shrinking from pass to pass. Direct light is sampled\n"
                 "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
                 "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
@@ -302,8 +302,11 @@ int cmdRender(int argc, char** argv) {
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
     cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
              [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
-    cmd.add({"--passes", "N", "passes to render and average (default 1; splat: each new eye samples and photons, path: --spp each)",
-             [&](const std::string& v) { cfg.passes = parseNumber<int>("--passes", v); }});
+    cmd.add({"--passes", "N", "passes to render and average (default: splat 8, each new eye samples and photons; path 1 of --spp)",
+             [&](const std::string& v) {
+                 cfg.passes = parseNumber<int>("--passes", v);
+                 if (cfg.passes < 1) throw Error(ErrorKind::Config, "--passes " + v + " is out of range (1..1048576)");
+             }});
     cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
     cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default 0.667)",

@@ -66,7 +66,7 @@ void RenderConfig::validate() const {
     photonSplit(used);
     if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
     requireRange("--light-samples", lightSamples, 1, 4096);
-    requireRange("--passes", passes, 1, 1 << 20);
+    requireRange("--passes", passes, 0, 1 << 20);
     requireRange("--alpha", alpha, 0.01, 1);
     requireRange("--max-depth", maxDepth, 1, 1024);
     requireRange("--threads", threads, 0, 1024);
@@ -121,7 +121,7 @@ ImageAttributes RenderConfig::attributes() const {
             {"maxDepth", std::to_string(maxDepth)},
             {"camera", camera.empty() ? "(first)" : camera},
             {"timeLimit", std::to_string(timeLimit)},
-            {"passes", std::to_string(passes)},
+            {"passes", std::to_string(passCount())},
             {"grid", std::to_string(grid)},
             {"voxelizer", voxelizer}};
     if (splats()) {

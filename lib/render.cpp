@@ -32,7 +32,7 @@ namespace {
 
 constexpr double kMB = 1024.0 * 1024.0;
 
-// Progressive rendering: cfg.passes passes, or with a time limit as many as fit (at least
+// Progressive rendering: cfg.passCount() passes, or with a time limit as many as fit (at least
 // one), averaged with equal weights. Each pass reports as one unit of the "rendering"
 // progress when there is more than one.
 template <class RenderPass>
@@ -40,8 +40,9 @@ Film renderPasses(const RenderConfig& cfg, int width, int height, Reporter& repo
     Timer t;
     Film sum(width, height);
     const bool timed = cfg.timeLimit > 0.0;
-    const bool several = timed || cfg.passes > 1;
-    if (several) reporter.begin("rendering", timed ? 0 : cfg.passes, "passes");
+    const int wanted = cfg.passCount();
+    const bool several = timed || wanted > 1;
+    if (several) reporter.begin("rendering", timed ? 0 : wanted, "passes");
     int passes = 0;
     double longest = 0.0;
     for (;;) {
@@ -50,7 +51,7 @@ Film renderPasses(const RenderConfig& cfg, int width, int height, Reporter& repo
         ++passes;
         longest = std::max(longest, one.seconds());
         if (several) reporter.advance(1);
-        if (timed ? t.seconds() + longest > cfg.timeLimit : passes >= cfg.passes) break;
+        if (timed ? t.seconds() + longest > cfg.timeLimit : passes >= wanted) break;
     }
     if (several) reporter.end();
     sum.scale(1.f / float(passes));

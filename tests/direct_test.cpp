@@ -24,6 +24,7 @@ RenderConfig sampledConfig(int width) {
     cfg.grid = 96;
     cfg.voxelizer = "cpu";
     cfg.photons = 40000;
+    cfg.passes = 1;
     return cfg;
 }
 

@@ -158,6 +158,7 @@ RenderConfig roomConfig(int grid, const std::string& camera) {
     cfg.grid = grid;
     cfg.voxelizer = "cpu";
     cfg.camera = camera;
+    cfg.passes = 1;
     return cfg;
 }
 

@@ -51,6 +51,7 @@ RenderConfig splatConfig(int width, Method method = Method::Splat) {
     cfg.spp = 4;
     cfg.grid = 96;
     cfg.voxelizer = "cpu";
+    cfg.passes = 1;
     return cfg;
 }
 
