@@ -18,6 +18,15 @@ int dominantAxis(const uint8_t c[kSideCount]) {
     return best;
 }
 
+VoxelOcclusion VoxelOcclusion::of(const uint8_t c[kSideCount]) {
+    uint32_t bits = uint32_t(rs::dominantAxis(c)) << 30;
+    for (int s = 0; s < kSideCount; ++s) {
+        RS_CHECK(c[s] <= kSubsamples);
+        bits |= uint32_t(c[s]) << (5 * s);
+    }
+    return VoxelOcclusion{bits};
+}
+
 Node Node::occlusion(const uint8_t c[kSideCount]) {
     uint64_t bits = uint64_t(NodeType::Occlusion) | uint64_t(rs::dominantAxis(c)) << 2 |
                     uint64_t(ambiguousCounts(c) ? 1 : 0) << 4;
@@ -84,22 +93,23 @@ private:
     std::vector<uint32_t> table_;
 };
 
+// Top-down over boxes of bricks (box coordinates in bricks; nodes and bricks in voxels).
 class Builder {
 public:
     Builder(const OcclusionGrid& grid, const SummedAreaTable& sat, const std::vector<uint64_t>& sampleKeys,
-            std::vector<uint32_t>& order, std::vector<Node>& nodes)
-        : grid_(grid), sat_(sat), keys_(sampleKeys), order_(order), nodes_(nodes) {}
+            std::vector<uint32_t>& order, OcclusionTree& tree)
+        : grid_(grid), sat_(sat), keys_(sampleKeys), order_(order), tree_(tree),
+          brickDims_((grid.geometry.dims + IVec3(kBrickSize - 1)) / kBrickSize) {}
 
     void build(const Box& box, int depth) {
         maxDepth_ = std::max(maxDepth_, depth);
-        uint32_t count = sat_.count(box);
-        if (count == 0) {
+        if (sat_.count(box) == 0) {
             push(Node::empty());
             return;
         }
         IVec3 ext = box.hi - box.lo;
         if (ext.x == 1 && ext.y == 1 && ext.z == 1) {
-            buildVoxel(box.lo);
+            buildBrick(box.lo);
             return;
         }
 
@@ -109,7 +119,7 @@ public:
         for (int a = 1; a < 3; ++a)
             if (ext[a] > ext[axis]) axis = a;
         int lo = box.lo[axis], hi = box.hi[axis], mid = lo + (hi - lo) / 2;
-        auto slabs = [&](int a, int b) {  // interesting voxels in slabs [a, b) of the box
+        auto slabs = [&](int a, int b) {  // interesting bricks in slabs [a, b) of the box
             Box s = box;
             s.lo[axis] = a;
             s.hi[axis] = b;
@@ -137,20 +147,22 @@ public:
         }
         RS_CHECK(plane > lo && plane < hi);
 
-        size_t self = push(Node::split(axis, plane, 0));
+        const int planeVoxel = plane * kBrickSize;  // inside the grid: plane < the last brick
+        size_t self = push(Node::split(axis, planeVoxel, 0));
         Box lower = box, upper = box;
         lower.hi[axis] = plane;
         upper.lo[axis] = plane;
         build(lower, depth + 1);
-        RS_CHECK(nodes_.size() < (size_t(1) << 32));
-        nodes_[self] = Node::split(axis, plane, uint32_t(nodes_.size()));
+        RS_CHECK(tree_.nodes.size() < (size_t(1) << 32));
+        tree_.nodes[self] = Node::split(axis, planeVoxel, uint32_t(tree_.nodes.size()));
         build(upper, depth + 1);
 
         // Collapse a split between two equal Occlusion nodes (uniform, sample-free block).
-        if (nodes_.size() == self + 3 && nodes_[self + 1].type() == NodeType::Occlusion &&
-            nodes_[self + 1].bits == nodes_[self + 2].bits) {
-            nodes_[self] = nodes_[self + 1];
-            nodes_.resize(self + 1);
+        std::vector<Node>& nodes = tree_.nodes;
+        if (nodes.size() == self + 3 && nodes[self + 1].type() == NodeType::Occlusion &&
+            nodes[self + 1].bits == nodes[self + 2].bits) {
+            nodes[self] = nodes[self + 1];
+            nodes.resize(self + 1);
         }
     }
 
@@ -158,35 +170,61 @@ public:
 
 private:
     size_t push(Node n) {
-        nodes_.push_back(n);
-        return nodes_.size() - 1;
+        tree_.nodes.push_back(n);
+        return tree_.nodes.size() - 1;
     }
 
-    void buildVoxel(const IVec3& v) {
-        size_t index = grid_.geometry.index(v.x, v.y, v.z);
-        // This voxel's eye samples: a run of the sorted (voxel << 32 | sample) keys.
-        auto first = std::lower_bound(keys_.begin(), keys_.end(), uint64_t(index) << 32);
-        auto last = first;
-        while (last != keys_.end() && (*last >> 32) == index) ++last;
-        if (last != first) {
-            size_t n = size_t(last - first);
-            RS_CHECK(order_.size() + n < (size_t(1) << 32) && n < (size_t(1) << 30));
-            push(Node::visible(uint32_t(order_.size()), uint32_t(n)));
-            for (auto it = first; it != last; ++it) order_.push_back(uint32_t(*it & 0xffffffffu));
+    // One brick: a Brick leaf with its occupied voxels and samples, or an Occlusion leaf when
+    // every voxel of it is occupied with the same counts and it holds no samples.
+    void buildBrick(const IVec3& b) {
+        const GridGeometry& g = grid_.geometry;
+        const IVec3 lo = b * kBrickSize, hi = glm::min(lo + IVec3(kBrickSize), g.dims);
+        Brick brick;
+        brick.firstVoxel = uint32_t(tree_.voxels.size());
+        bool uniform = true;
+        const uint8_t* first = grid_.voxel(g.index(lo.x, lo.y, lo.z));
+        for (int z = lo.z; z < hi.z; ++z)
+            for (int y = lo.y; y < hi.y; ++y)
+                for (int x = lo.x; x < hi.x; ++x) {
+                    size_t i = g.index(x, y, z);
+                    uniform = uniform && grid_.occupied(i) && std::equal(first, first + kSideCount, grid_.voxel(i));
+                    if (!grid_.occupied(i)) continue;
+                    brick.occupied |= uint64_t(1) << ((x - lo.x) + kBrickSize * ((y - lo.y) + kBrickSize * (z - lo.z)));
+                }
+        // This brick's eye samples: a run of the sorted (brick << 32 | sample) keys.
+        const uint64_t index = uint64_t(b.x) + uint64_t(brickDims_.x) * (uint64_t(b.y) + uint64_t(brickDims_.y) * b.z);
+        auto from = std::lower_bound(keys_.begin(), keys_.end(), index << 32);
+        auto to = from;
+        while (to != keys_.end() && (*to >> 32) == index) ++to;
+        if (uniform && from == to) {
+            push(Node::occlusion(first));
+            return;
         }
-        if (grid_.occupied(index)) push(Node::occlusion(grid_.voxel(index)));
-        else push(Node::empty());
+        // The occupied voxels' occlusion, in bit order (x fastest, then y, then z).
+        for (uint64_t bits = brick.occupied; bits; bits &= bits - 1) {
+            int bit = __builtin_ctzll(bits);
+            IVec3 v = lo + IVec3(bit & 3, (bit >> 2) & 3, bit >> 4);
+            tree_.voxels.push_back(VoxelOcclusion::of(grid_.voxel(g.index(v.x, v.y, v.z))));
+        }
+        RS_CHECK(order_.size() + size_t(to - from) < (size_t(1) << 32));
+        brick.firstSample = uint32_t(order_.size());
+        brick.sampleCount = uint32_t(to - from);
+        for (auto it = from; it != to; ++it) order_.push_back(uint32_t(*it & 0xffffffffu));
+        RS_CHECK(tree_.bricks.size() < (size_t(1) << 32));
+        push(Node::brickLeaf(uint32_t(tree_.bricks.size())));
+        tree_.bricks.push_back(brick);
     }
 
     const OcclusionGrid& grid_;
     const SummedAreaTable& sat_;
     const std::vector<uint64_t>& keys_;
     std::vector<uint32_t>& order_;
-    std::vector<Node>& nodes_;
+    OcclusionTree& tree_;
+    IVec3 brickDims_;
     int maxDepth_ = 0;
 };
 
-// Counts by type and the voxels inside collapsed Occlusion nodes, by walking the boxes.
+// Counts by type, the voxels inside collapsed Occlusion nodes and in bricks, by walking the boxes.
 void countNodes(const OcclusionTree& tree, OcclusionTreeStats& st) {
     struct Item {
         uint32_t node;
@@ -207,9 +245,9 @@ void countNodes(const OcclusionTree& tree, OcclusionTreeStats& st) {
                 stack.push_back({it.node + 1, lower});
                 break;
             }
-            case NodeType::Visible:
-                ++st.visible;
-                stack.push_back({it.node + 1, it.box});
+            case NodeType::Brick:
+                ++st.bricks;
+                st.brickVoxels += size_t(__builtin_popcountll(tree.bricks[n.brick()].occupied));
                 break;
             case NodeType::Occlusion: {
                 ++st.occlusion;
@@ -239,8 +277,12 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     RS_CHECK(grid.counts.size() == g.voxelCount() * kSideCount);
     RS_CHECK(samples.size() < (size_t(1) << 32));
 
-    // Eye samples by voxel: sorted (voxel << 32 | sample) keys; outside ones kept apart.
+    // Eye samples by brick: sorted (brick << 32 | sample) keys; outside ones kept apart.
     Timer sortTimer;
+    const IVec3 brickDims = (g.dims + IVec3(kBrickSize - 1)) / kBrickSize;
+    auto brickIndex = [&](int x, int y, int z) {
+        return size_t(x >> kBrickShift) + size_t(brickDims.x) * (size_t(y >> kBrickShift) + size_t(brickDims.y) * size_t(z >> kBrickShift));
+    };
     const size_t n = samples.size();
     std::vector<uint64_t> keys(n);
     std::vector<uint8_t> inside(n);
@@ -251,7 +293,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
             bool ok = isFinite(p) && f.x >= 0.f && f.y >= 0.f && f.z >= 0.f && f.x < float(g.dims.x) &&
                       f.y < float(g.dims.y) && f.z < float(g.dims.z);
             inside[size_t(i)] = ok;
-            keys[size_t(i)] = ok ? uint64_t(g.index(int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
+            keys[size_t(i)] = ok ? uint64_t(brickIndex(int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
         }
     });
     std::sort(keys.begin(), keys.end());
@@ -259,14 +301,20 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     st.samplesOutside = n - keys.size();
     st.sortSeconds = sortTimer.seconds();
 
-    // Interesting voxels: occupied, or holding an eye sample.
+    // Interesting bricks: holding an occupied voxel or an eye sample.
     Timer satTimer;
-    std::vector<uint8_t> flags(g.voxelCount());
-    pool.parallelFor(int64_t(g.voxelCount()), 1 << 16, [&](int64_t b, int64_t e, int) {
-        for (int64_t i = b; i < e; ++i) flags[size_t(i)] = grid.occupied(size_t(i));
+    std::vector<uint8_t> flags(size_t(brickDims.x) * brickDims.y * brickDims.z);
+    pool.parallelFor(int64_t(brickDims.y) * brickDims.z, 16, [&](int64_t b, int64_t e, int) {
+        for (int64_t row = b; row < e; ++row) {  // one row of bricks along x
+            const int by = int(row % brickDims.y), bz = int(row / brickDims.y);
+            for (int z = bz * kBrickSize; z < std::min(g.dims.z, (bz + 1) * kBrickSize); ++z)
+                for (int y = by * kBrickSize; y < std::min(g.dims.y, (by + 1) * kBrickSize); ++y)
+                    for (int x = 0; x < g.dims.x; ++x)
+                        if (grid.occupied(g.index(x, y, z))) flags[brickIndex(x, y, z)] = 1;
+        }
     });
     for (uint64_t k : keys) flags[k >> 32] = 1;
-    SummedAreaTable sat(g.dims, flags, pool);
+    SummedAreaTable sat(brickDims, flags, pool);
     flags = {};
     st.satSeconds = satTimer.seconds();
 
@@ -275,13 +323,15 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     tree.geometry = g;
     std::vector<uint32_t> order;
     order.reserve(n);
-    Builder builder(grid, sat, keys, order, tree.nodes);
-    builder.build({IVec3(0), g.dims}, 0);
+    Builder builder(grid, sat, keys, order, tree);
+    builder.build({IVec3(0), brickDims}, 0);
     RS_CHECK(order.size() == keys.size());
     tree.sampleCount = uint32_t(order.size());
     for (size_t i = 0; i < n; ++i)
         if (!inside[i]) order.push_back(uint32_t(i));
     tree.nodes.shrink_to_fit();
+    tree.bricks.shrink_to_fit();
+    tree.voxels.shrink_to_fit();
     st.buildSeconds = buildTimer.seconds();
 
     sortTimer = Timer();

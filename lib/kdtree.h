@@ -1,31 +1,37 @@
-// Occlusion tree (DESIGN §7, paper §5): a kd-tree of 8-byte nodes over the OcclusionGrid
-// that merges empty space and indexes the eye samples, built top-down on the CPU.
+// Occlusion tree (docs/design.md §6, paper §5): a kd-tree of 8-byte nodes over the
+// OcclusionGrid that merges empty space and indexes the eye samples, built top-down on the CPU.
 //
 // Takes:   the OcclusionGrid and the EyeSamples (world positions → voxel space with
 //          grid.geometry.voxelFromWorld).
-// Returns: the OcclusionTree; the eye samples are reordered in place so that each Visible
-//          node's samples are contiguous. Samples outside the grid (or non-finite) are not
-//          an error: they are moved to the end, [tree.sampleCount, samples.size()), belong to
-//          no node and receive no photon energy; stats.samplesOutside counts them so the
-//          caller can warn (the grid is the scene's bounds padded by a voxel, so with a
-//          matching grid there are none).
+// Returns: the OcclusionTree; the eye samples are reordered in place so that each brick's
+//          samples are contiguous. Samples outside the grid (or non-finite) are not an error:
+//          they are moved to the end, [tree.sampleCount, samples.size()), belong to no brick
+//          and receive no photon energy; stats.samplesOutside counts them so the caller can
+//          warn (the grid is the scene's bounds padded by a voxel, so with a matching grid
+//          there are none).
 // Space:   everything in voxel space (one unit a voxel, origin at the grid's min corner).
 //
-// Build: a temporary 3D summed-area table of "interesting" voxels (occupied, or holding an
-// eye sample) gives the count of any box in O(1). A node's box is split on its longest axis
-// (ties: lowest axis) at the spatial median voxel boundary, or, when one side of the median
-// holds nothing interesting, at the boundary of the closest interesting voxel slab, which
-// cuts the empty space off into an Empty node. A box with nothing interesting is Empty. A
-// single voxel is an Occlusion leaf (occupied) or an Empty leaf, with a Visible node right
-// above it when the voxel holds eye samples. A Split whose two children are equal
-// Occlusion leaves collapses into one Occlusion node (bottom-up: a uniform, sample-free,
-// fully occupied sub-tree becomes one node). Single-threaded and deterministic; the SAT is
-// built on the pool.
+// Leaves are *bricks* of 4×4×4 voxels aligned to the grid (the last ones along an axis may be
+// cut by the grid): a Brick node holds the index of its payload — a 64-bit occupancy mask, the
+// occlusion counts of its occupied voxels in mask order, and its range of eye samples — so a
+// cylinder meets one node where it met up to 64 voxel leaves and their Visible nodes, and walks
+// the occupied voxels and samples inside with bit operations over contiguous arrays.
+//
+// Build: a temporary 3D summed-area table over the bricks (a brick is "interesting" when it
+// holds an occupied voxel or an eye sample) gives the count of any box of bricks in O(1). A
+// box is split on its longest axis (ties: lowest axis) at the spatial median brick boundary,
+// or, when one side of the median holds nothing interesting, at the boundary of the closest
+// interesting slab, which cuts the empty space off into an Empty node (paper §5). A box with
+// nothing interesting is Empty. A single brick is a Brick leaf, or an Occlusion leaf when all
+// its voxels are occupied with the same counts and it holds no samples (uniform occlusion); a
+// Split whose two children are equal Occlusion leaves collapses into one (bottom-up: a uniform,
+// sample-free, fully occupied sub-tree becomes one node). Single-threaded and deterministic;
+// the grid scan is done on the pool.
 //
 // Traversal of a cylinder: kdtree_traverse.h.
 //
-// Layout: depth first; a Split's lower child follows it, its upper child's index is stored;
-// a Visible node's child follows it. The root is node 0.
+// Layout: depth first; a Split's lower child follows it, its upper child's index is stored.
+// The root is node 0.
 #pragma once
 
 #include <cstdint>
@@ -39,13 +45,39 @@
 namespace rs {
 
 constexpr int kMaxTreeDim = 4096;  // split planes are stored in 13 bits
+constexpr int kBrickShift = 2;     // bricks of 4×4×4 voxels
+constexpr int kBrickSize = 1 << kBrickShift;
 
-enum class NodeType : uint32_t { Empty = 0, Split = 1, Occlusion = 2, Visible = 3 };
+enum class NodeType : uint32_t { Empty = 0, Split = 1, Occlusion = 2, Brick = 3 };
+
+// The occlusion of one voxel in 32 bits: bits 0-29 the six side counts (5 bits each, Side
+// order, 0…16), 30-31 the dominant axis (largest c₊ + c₋, ties: lowest; paper §5.3).
+struct VoxelOcclusion {
+    uint32_t bits = 0;
+
+    int count(int side) const { return int(bits >> (5 * side)) & 31; }
+    int dominantAxis() const { return int(bits >> 30); }
+    bool ambiguous() const {
+        return (count(0) && count(1)) || (count(2) && count(3)) || (count(4) && count(5));
+    }
+    static VoxelOcclusion of(const uint8_t counts[6]);
+};
+
+// A brick's payload. Voxel (x, y, z) of the brick (0…3 each, from the brick's min corner) is
+// bit x + 4y + 16z of `occupied`; the occupied voxels' occlusion is stored from `firstVoxel` on,
+// in bit order; the brick's eye samples are [firstSample, firstSample + sampleCount).
+struct Brick {
+    uint64_t occupied = 0;
+    uint32_t firstVoxel = 0;
+    uint32_t firstSample = 0;
+    uint32_t sampleCount = 0;
+    uint32_t pad = 0;  // no indeterminate bytes: trees compare with memcmp
+};
 
 // One 64-bit word:
 //   bits 0-1  type
 //   Split:     2-3 axis, 4-16 plane (voxel boundary 0…4096), 32-63 index of the upper child
-//   Visible:   2-31 sample count, 32-63 first sample index
+//   Brick:     32-63 index of its payload in OcclusionTree::bricks
 //   Occlusion: 2-3 dominant axis, 4 ambiguous, 5-34 the six side counts (5 bits each, Side
 //              order, 0…16), 35-58 quantized mean normal (3 × int8, ×127, paper Fig. 3)
 struct Node {
@@ -57,8 +89,7 @@ struct Node {
     int plane() const { return int(bits >> 4) & 0x1fff; }
     uint32_t upperChild() const { return uint32_t(bits >> 32); }
 
-    uint32_t sampleCount() const { return uint32_t(bits >> 2) & 0x3fffffffu; }
-    uint32_t firstSample() const { return uint32_t(bits >> 32); }
+    uint32_t brick() const { return uint32_t(bits >> 32); }
 
     int dominantAxis() const { return int(bits >> 2) & 3; }
     bool ambiguous() const { return (bits >> 4) & 1u; }
@@ -72,10 +103,11 @@ struct Node {
     static Node split(int axis, int plane, uint32_t upper) {
         return Node{uint64_t(NodeType::Split) | uint64_t(axis) << 2 | uint64_t(plane) << 4 | uint64_t(upper) << 32};
     }
-    static Node visible(uint32_t first, uint32_t count) {
-        return Node{uint64_t(NodeType::Visible) | uint64_t(count) << 2 | uint64_t(first) << 32};
-    }
+    static Node brickLeaf(uint32_t index) { return Node{uint64_t(NodeType::Brick) | uint64_t(index) << 32}; }
     static Node occlusion(const uint8_t counts[kSideCount]);
+    VoxelOcclusion voxel() const {
+        return VoxelOcclusion{(uint32_t(bits >> 5) & 0x3fffffffu) | (uint32_t(dominantAxis()) << 30)};
+    }
 };
 static_assert(sizeof(Node) == 8, "paper §5: 8-byte nodes");
 
@@ -88,14 +120,18 @@ inline bool ambiguousCounts(const uint8_t c[kSideCount]) {
 
 struct OcclusionTree {
     GridGeometry geometry;
-    std::vector<Node> nodes;   // root at 0
-    uint32_t sampleCount = 0;  // eye samples [0, sampleCount) are in Visible nodes
+    std::vector<Node> nodes;             // root at 0
+    std::vector<Brick> bricks;           // Brick nodes' payloads
+    std::vector<VoxelOcclusion> voxels;  // the bricks' occupied voxels
+    uint32_t sampleCount = 0;            // eye samples [0, sampleCount) are in bricks
 
-    size_t bytes() const { return nodes.size() * sizeof(Node); }
+    size_t bytes() const {
+        return nodes.size() * sizeof(Node) + bricks.size() * sizeof(Brick) + voxels.size() * sizeof(VoxelOcclusion);
+    }
 };
 
 struct OcclusionTreeStats {
-    size_t nodes = 0, empty = 0, split = 0, occlusion = 0, visible = 0;
+    size_t nodes = 0, empty = 0, split = 0, occlusion = 0, bricks = 0, brickVoxels = 0;
     size_t collapsedVoxels = 0;  // voxels inside multi-voxel Occlusion nodes
     size_t bytes = 0;
     size_t samplesOutside = 0;

@@ -1,4 +1,4 @@
-// Traversal of a photon cylinder through the occlusion tree (paper §5.1–5.3, DESIGN §9).
+// Traversal of a photon cylinder through the occlusion tree (paper §5.1–5.3, docs/design.md §8).
 //
 // Takes:   the OcclusionTree, the (tree-sorted) EyeSamples, a Cylinder in voxel space, a
 //          per-thread TraversalScratch and a visitor visit(uint32_t sample, float V).
@@ -50,8 +50,10 @@
 // (lower child first iff ω_a ≥ 0) serves the early exit: once a node's every sample would
 // read full cells and its occluders could only add to full cells — all the cells its
 // projection touches were filled by occluders of slices before the node's first slice — it
-// is skipped (a wall stops the traversal behind it). Only valid cells count. Cylinder parts outside the grid or past
-// L are never visited.
+// is skipped (a wall stops the traversal behind it). Only valid cells count. Cylinder parts
+// outside the grid or past L are never visited. At a brick leaf the occupied voxels (its mask's
+// bits inside the cylinder part's bounds) that are met become occluders and its samples that
+// are reached are collected; a collapsed Occlusion block contributes each of its met voxels.
 #pragma once
 
 #include <climits>
@@ -238,15 +240,15 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
     s.occluders.clear();
     s.samples.clear();
 
-    auto addOccluder = [&](int ix, int iy, int iz, const Node& node) {
+    auto addOccluder = [&](int ix, int iy, int iz, VoxelOcclusion voxel) {
         Vec3 c(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f);
         if (hasNormal && glm::dot(c - o, n) <= tangentOffset) return;
         float occ = 0.f;
-        for (int a = 0; a < 3; ++a) occ += occWeight[a] * float(node.count(side[a]));
+        for (int a = 0; a < 3; ++a) occ += occWeight[a] * float(voxel.count(side[a]));
         occ = std::min(1.f, occ);
         if (occ <= 0.f) return;
         int v[3] = {ix, iy, iz};
-        int slice = sliceOf(v[N]) + (node.ambiguous() ? ambOffset[node.dominantAxis()] : 0);
+        int slice = sliceOf(v[N]) + (voxel.ambiguous() ? ambOffset[voxel.dominantAxis()] : 0);
         int cu = int(std::floor((c[U] - o[U]) - kU * (c[N] - o[N]))) + halfU;
         int cv = int(std::floor((c[V] - o[V]) - kV * (c[N] - o[N]))) + halfV;
         if (cu < 0 || cv < 0 || cu >= sizeU || cv >= sizeV) {
@@ -272,6 +274,49 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
             lo[b] = std::max(float(e.lo[b]), std::min(a0, a1) - r[b]);
             hi[b] = std::min(float(e.hi[b]), std::max(a0, a1) + r[b]);
         }
+    };
+
+    // A voxel is met when the t-range its own six faces allow is not empty (the same range,
+    // bit for bit, as the one the splits narrowed down to its leaf). A point within h' of the
+    // axis at a depth t ∈ [0, L] lies in that t's disc, whose box then overlaps its voxel's:
+    // the voxel is met without the six divisions.
+    const float hOcc2 = hOcc * hOcc;
+    auto surelyMet = [&](const Vec3& p) {
+        const Vec3 d = p - o;
+        const float along = glm::dot(d, w);
+        return along >= 0.f && along <= L && glm::dot(d, d) - along * along < hOcc2;
+    };
+    auto voxelMet = [&](int x, int y, int z) {
+        float t0 = 0.f, t1 = L;
+        const int v[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a) {
+            clipLowerFace(o[a], w[a], r[a], float(v[a]), t0, t1);
+            clipUpperFace(o[a], w[a], r[a], float(v[a] + 1), t0, t1);
+        }
+        return t0 <= t1;
+    };
+    // The voxels of a node's box that may be met: the cylinder part's bounds, widened a voxel.
+    auto metRange = [&](const StackEntry& e, int i0[3], int i1[3]) {
+        Vec3 lo, hi;
+        nodeBounds(e, lo, hi);
+        for (int b = 0; b < 3; ++b) {
+            i0[b] = std::max(int(e.lo[b]), int(std::floor(lo[b])) - 1);
+            i1[b] = std::min(int(e.hi[b]), int(std::ceil(hi[b])) + 1);
+        }
+    };
+    // The bits of a brick (whose min corner is e.lo) inside voxel ranges [i0, i1).
+    auto brickRangeMask = [](const StackEntry& e, const int i0[3], const int i1[3]) {
+        auto axisBits = [](int from, int to) { return to <= from ? 0u : ((1u << to) - 1u) & ~((1u << from) - 1u); };
+        uint64_t mask = 0;
+        const unsigned xs = axisBits(i0[0] - e.lo[0], i1[0] - e.lo[0]);
+        const unsigned ys = axisBits(i0[1] - e.lo[1], i1[1] - e.lo[1]);
+        const unsigned zs = axisBits(i0[2] - e.lo[2], i1[2] - e.lo[2]);
+        for (int z = 0; z < kBrickSize; ++z) {
+            if (!(zs >> z & 1u)) continue;
+            for (int y = 0; y < kBrickSize; ++y)
+                if (ys >> y & 1u) mask |= uint64_t(xs) << (kBrickSize * (y + kBrickSize * z));
+        }
+        return mask;
     };
 
     // Early exit: every cell the node's points project to (and their bilinear
@@ -337,48 +382,50 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
                 if (nearChild.t0 <= nearChild.t1) s.stack.push_back(nearChild);
                 break;
             }
-            case NodeType::Visible: {
-                // Above its voxel's leaf: the samples are collected before the voxel's occluder.
-                const int slice = sliceOf(e.lo[N]);
-                for (uint32_t i = node.firstSample(), end = i + node.sampleCount(); i < end; ++i) {
+            case NodeType::Brick: {
+                // The brick's occupied voxels that the cylinder meets, then its samples.
+                const Brick& brick = tree.bricks[node.brick()];
+                int i0[3], i1[3];
+                metRange(e, i0, i1);
+                const uint64_t candidates = brick.occupied & brickRangeMask(e, i0, i1);
+                // Walk the occupied bits in order: the rank of a bit is where its counts are.
+                uint32_t rank = 0;
+                for (uint64_t bits = candidates ? brick.occupied : 0; bits; bits &= bits - 1, ++rank) {
+                    const int bit = __builtin_ctzll(bits);
+                    if (!(candidates >> bit & 1)) continue;
+                    const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
+                    if (!surelyMet(Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f)) && !voxelMet(x, y, z)) continue;
+                    addOccluder(x, y, z, tree.voxels[brick.firstVoxel + rank]);
+                }
+                for (uint32_t i = brick.firstSample, end = i + brick.sampleCount; i < end; ++i) {
                     Vec3 p = g.voxelFromWorld(eye.position[i]);
                     Vec3 d = p - o;
                     float along = glm::dot(d, w);
                     if (glm::dot(d, d) - along * along >= kernel2) continue;
+                    // Reached when its voxel is met (surely so inside the segment's depth range,
+                    // h < h'); clamped to the brick, where the tree put it.
+                    int v[3];
+                    for (int a = 0; a < 3; ++a) v[a] = std::clamp(int(std::floor(p[a])), int(e.lo[a]), int(e.hi[a]) - 1);
+                    if (!(along >= 0.f && along <= L) && !voxelMet(v[0], v[1], v[2])) continue;
                     float u = (p[U] - o[U]) - kU * (p[N] - o[N]);
-                    float v = (p[V] - o[V]) - kV * (p[N] - o[N]);
-                    s.samples.push_back({i, slice, u, v});
+                    float vv = (p[V] - o[V]) - kV * (p[N] - o[N]);
+                    s.samples.push_back({i, sliceOf(v[N]), u, vv});
                     ++st.samplesReached;
                 }
-                StackEntry child = e;
-                child.node = e.node + 1;
-                s.stack.push_back(child);
                 break;
             }
             case NodeType::Occlusion: {
                 if (e.hi[0] - e.lo[0] == 1 && e.hi[1] - e.lo[1] == 1 && e.hi[2] - e.lo[2] == 1) {
-                    addOccluder(e.lo[0], e.lo[1], e.lo[2], node);
+                    addOccluder(e.lo[0], e.lo[1], e.lo[2], node.voxel());
                     break;
                 }
                 // A collapsed block: each of its met voxels is an occluder.
-                Vec3 lo, hi;
-                nodeBounds(e, lo, hi);
                 int i0[3], i1[3];
-                for (int b = 0; b < 3; ++b) {
-                    i0[b] = std::max(int(e.lo[b]), int(std::floor(lo[b])) - 1);
-                    i1[b] = std::min(int(e.hi[b]), int(std::ceil(hi[b])) + 1);
-                }
+                metRange(e, i0, i1);
                 for (int z = i0[2]; z < i1[2]; ++z)
                     for (int y = i0[1]; y < i1[1]; ++y)
-                        for (int x = i0[0]; x < i1[0]; ++x) {
-                            float t0 = 0.f, t1 = L;
-                            int v[3] = {x, y, z};
-                            for (int a = 0; a < 3; ++a) {
-                                clipLowerFace(o[a], w[a], r[a], float(v[a]), t0, t1);
-                                clipUpperFace(o[a], w[a], r[a], float(v[a] + 1), t0, t1);
-                            }
-                            if (t0 <= t1) addOccluder(x, y, z, node);
-                        }
+                        for (int x = i0[0]; x < i1[0]; ++x)
+                            if (voxelMet(x, y, z)) addOccluder(x, y, z, node.voxel());
                 break;
             }
         }

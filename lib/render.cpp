@@ -141,7 +141,8 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
         stats.setCount("tree_nodes_empty", double(ts.empty));
         stats.setCount("tree_nodes_split", double(ts.split));
         stats.setCount("tree_nodes_occlusion", double(ts.occlusion));
-        stats.setCount("tree_nodes_visible", double(ts.visible));
+        stats.setCount("tree_bricks", double(ts.bricks));
+        stats.setCount("tree_brick_voxels", double(ts.brickVoxels));
         stats.setCount("tree_depth", double(ts.depth));
         stats.setCount("tree_mb", ts.bytes / kMB);
         if (pass == 0 && ts.samplesOutside > 0)

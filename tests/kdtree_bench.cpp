@@ -137,8 +137,8 @@ int main() {
     std::printf("\n  build (median of 3): total %.3f s = SAT %.3f s + recursion %.3f s + sample sort/permute %.3f s\n",
                 median3(total[0], total[1], total[2]), median3(sat[0], sat[1], sat[2]),
                 median3(build[0], build[1], build[2]), median3(sort[0], sort[1], sort[2]));
-    std::printf("  nodes %zu: empty %zu, split %zu, occlusion %zu (%zu voxels collapsed), visible %zu; depth %d\n",
-                st.nodes, st.empty, st.split, st.occlusion, st.collapsedVoxels, st.visible, st.depth);
+    std::printf("  nodes %zu: empty %zu, split %zu, occlusion %zu (%zu voxels collapsed), brick %zu (%zu voxels); depth %d\n",
+                st.nodes, st.empty, st.split, st.occlusion, st.collapsedVoxels, st.bricks, st.brickVoxels, st.depth);
     const double mb = 1.0 / (1024.0 * 1024.0);
     std::printf("  memory: tree %.2f MB (paper 5), eye samples %.2f MB for %zu (paper 26), SAT (temporary) %.1f MB\n",
                 double(st.bytes) * mb, double(samples.bytes()) * mb, samples.size(),
