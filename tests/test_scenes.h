@@ -5,9 +5,13 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
+#include "config.h"
+#include "log.h"
+#include "render.h"
 #include "scene.h"
 
 namespace rs::test {
@@ -117,6 +121,20 @@ inline uint32_t addMaterial(Scene& s, MaterialKind kind, Vec3 baseColor, Vec3 em
     if (kind == MaterialKind::Glass) { m.metallic = 0.f; m.roughness = 0.f; }
     s.materials.push_back(m);
     return uint32_t(s.materials.size() - 1);
+}
+
+// Renders `cfg` with 1 and with 2 threads and expects every light layer bit-identical;
+// returns the one-thread result.
+inline RenderResult expectSamePixelsWhateverTheThreadCount(const Scene& scene, RenderConfig cfg) {
+    cfg.threads = 1;
+    RenderResult a = render(scene, cfg, silentReporter());
+    cfg.threads = 2;
+    RenderResult b = render(scene, cfg, silentReporter());
+    EXPECT_EQ(a.film.pixelCount(), b.film.pixelCount());
+    for (int l = 0; l < kLayerCount && a.film.pixelCount() == b.film.pixelCount(); ++l)
+        EXPECT_EQ(0, std::memcmp(a.film.layers[l].data(), b.film.layers[l].data(), a.film.pixelCount() * sizeof(Vec3)))
+            << "layer " << layerName(l);
+    return a;
 }
 
 }  // namespace rs::test
