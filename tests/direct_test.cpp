@@ -171,6 +171,25 @@ TEST(DirectBySampling, PointLightThroughGlassComesFromCausticPhotons) {
     EXPECT_NEAR(mean(r.film.layers[kCaustic]) / want, 0.99, 0.04);
 }
 
+// Energy balance in a closed room whose walls all emit Le and reflect ρ (a white furnace):
+// radiance is Le/(1 − ρ) everywhere — Le seen directly, Le·ρ of sampled direct light, the
+// rest from indirect photons. Nothing is lost between the two estimators or counted twice.
+TEST(DirectBySampling, WhiteFurnaceRoomBalancesEnergy) {
+    Scene s;
+    const float rho = 0.5f, le = 1.f;
+    uint32_t wall = addMaterial(s, MaterialKind::Lambert, Vec3(rho), Vec3(le));
+    addBox(s, {-1, 0, -1}, {1, 2, 1}, wall, /*inward=*/true);
+    s.cameras.push_back(lookAt({0.f, 1.f, 0.8f}, {0.f, 1.f, -1.f}, {0.f, 1.f, 0.f}, 1.4f));
+    s.computeBounds();
+    RenderConfig cfg = sampledConfig(24);
+    cfg.photons = 100000;
+    RenderResult r = render(s, cfg, silentReporter());
+    const double want = le / (1.0 - rho);
+    EXPECT_NEAR(mean(r.film.layers[kEmission]), le, 1e-4);
+    EXPECT_NEAR(mean(r.film.layers[kDirect]) / (le * rho), 1.0, 0.02);
+    EXPECT_NEAR(mean(r.film.beautyImage()) / want, 1.0, 0.03);
+}
+
 // Progressive passes converge: relative MSE against a 4096-spp path render falls from 1 to
 // 4 to 16 passes (each pass's own noise is far above the reference's).
 TEST(Passes, ErrorFallsWithEveryQuadrupling) {
