@@ -278,7 +278,7 @@ int cmdRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.width = parseNumber<int>("--width", v); }});
     cmd.add({"--height", "N", "image height (default: from the width and the camera's aspect ratio)",
              [&](const std::string& v) { cfg.height = parseNumber<int>("--height", v); }});
-    cmd.add({"--spp", "N", "samples per pixel (default: splat 4 eye samples, path 16; path: per pass with --time-limit)",
+    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat 4 eye samples, path 16)",
              [&](const std::string& v) {
                  cfg.spp = parseNumber<int>("--spp", v);
                  if (cfg.spp < 1) throw Error(ErrorKind::Config, "--spp " + v + " is out of range (1..1048576)");
