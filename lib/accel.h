@@ -38,10 +38,14 @@ private:
     const Scene& scene_;
 };
 
+// How far a point at p is nudged off its surface before a ray leaves it.
+inline float rayOriginOffset(const Vec3& p) {
+    return 1e-4f * (1.f + std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+}
+
 // A ray origin nudged off the surface to the side `w` leaves by.
 inline Vec3 offsetRayOrigin(const SurfacePoint& sp, const Vec3& w) {
-    float scale = 1.f + std::max(std::abs(sp.p.x), std::max(std::abs(sp.p.y), std::abs(sp.p.z)));
-    float eps = 1e-4f * scale;
+    float eps = rayOriginOffset(sp.p);
     return sp.p + (glm::dot(w, sp.ng) > 0.f ? eps : -eps) * sp.ng;
 }
 

@@ -27,11 +27,6 @@ inline int64_t toFixed(float v) {
     return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
 }
 
-// The offset that lifts a point off its surface, as offsetRayOrigin does.
-inline float surfaceEpsilon(const Vec3& p) {
-    return 1e-4f * (1.f + std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
-}
-
 }  // namespace
 
 void SplatStats::add(const SplatStats& o) {
@@ -49,7 +44,7 @@ SegmentReceivers::Verdict SegmentReceivers::judge(const Vec3& y, const Vec3& ng,
     // 1. In front of the surface the segment leaves.
     if (hasOriginNormal_ && glm::dot(y - origin_, originNormal_) <= 0.f) return kBehindOrigin;
     // 2. V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
-    const Vec3 lifted = y + surfaceEpsilon(y) * ng;
+    const Vec3 lifted = y + rayOriginOffset(y) * ng;
     ++rays;
     return accel_.occluded(lifted, origin_ - lifted, 1.f) ? kHidden : kReceives;
 }
