@@ -113,4 +113,26 @@ bool RayAccel::occluded(const Vec3& o, const Vec3& d, float tmax) const {
     return ray.tfar < 0.f;
 }
 
+uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCRay16 rays;
+    int valid[kPacket];
+    for (int i = 0; i < kPacket; ++i) {
+        const bool live = i < count;
+        valid[i] = live ? -1 : 0;
+        const Vec3 o = live ? from[i] : to, d = to - o;
+        rays.org_x[i] = o.x, rays.org_y[i] = o.y, rays.org_z[i] = o.z;
+        rays.dir_x[i] = d.x, rays.dir_y[i] = d.y, rays.dir_z[i] = d.z;
+        rays.tnear[i] = 0.f, rays.tfar[i] = 1.f, rays.time[i] = 0.f;
+        rays.mask[i] = 0xffffffffu, rays.id[i] = uint32_t(i), rays.flags[i] = 0;
+    }
+    rtcOccluded16(valid, impl_->scene, &ctx, &rays);
+    uint32_t hidden = 0;
+    for (int i = 0; i < count; ++i)
+        if (rays.tfar[i] < 0.f) hidden |= 1u << i;
+    return hidden;
+}
+
 }  // namespace rs

@@ -29,6 +29,10 @@ public:
     bool intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint& hit, float& t) const;
     // Anything in (0, tmax)?
     bool occluded(const Vec3& o, const Vec3& d, float tmax) const;
+    // Up to kPacket segments from[i] → to at once (one Embree packet, the rays marked coherent:
+    // they share an end). Bit i of the result: something lies strictly between from[i] and to.
+    static constexpr int kPacket = 16;
+    uint32_t occludedToPoint(const Vec3* from, int count, const Vec3& to) const;
     const Scene& scene() const { return scene_; }
 
     struct Impl;  // Embree handles

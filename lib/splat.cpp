@@ -40,14 +40,55 @@ SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray)
     : accel_(accel), origin_(ray.origin),
       originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {}
 
-SegmentReceivers::Verdict SegmentReceivers::judge(const Vec3& y, const Vec3& ng, uint64_t& rays) const {
-    // 1. In front of the surface the segment leaves.
-    if (hasOriginNormal_ && glm::dot(y - origin_, originNormal_) <= 0.f) return kBehindOrigin;
-    // 2. V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
-    const Vec3 lifted = y + rayOriginOffset(y) * ng;
-    ++rays;
-    return accel_.occluded(lifted, origin_ - lifted, 1.f) ? kHidden : kReceives;
+uint32_t SegmentReceivers::hidden(const Vec3* y, const Vec3* ng, int count) const {
+    // V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
+    Vec3 lifted[RayAccel::kPacket];
+    for (int i = 0; i < count; ++i) lifted[i] = y[i] + rayOriginOffset(y[i]) * ng[i];
+    return accel_.occludedToPoint(lifted, count, origin_);
 }
+
+namespace {
+
+// Contributions waiting for rule 2, which is asked a packet at a time; those whose sample
+// turns out hidden are dropped, the others added to the thread's film buffer.
+class PendingContributions {
+public:
+    PendingContributions(const SegmentReceivers& receivers, SplatStats& stats) : receivers_(receivers), stats_(stats) {}
+    ~PendingContributions() { flush(); }
+
+    void add(const Vec3& y, const Vec3& ng, int64_t* pixel, const Vec3& c) {
+        y_[count_] = y, ng_[count_] = ng, pixel_[count_] = pixel, c_[count_] = c;
+        if (++count_ == RayAccel::kPacket) flush();
+    }
+    void flush() {
+        if (count_ == 0) return;
+        const uint32_t hidden = receivers_.hidden(y_, ng_, count_);
+        stats_.visibilityRays += uint64_t(count_);
+        for (int i = 0; i < count_; ++i) {
+            if (hidden >> i & 1u) {
+                ++stats_.refused[SegmentReceivers::kHidden];
+                continue;
+            }
+            addFixed(pixel_[i], c_[i]);
+            ++stats_.contributions;
+        }
+        count_ = 0;
+    }
+    static void addFixed(int64_t* px, const Vec3& c) {
+        px[0] += toFixed(c.x);
+        px[1] += toFixed(c.y);
+        px[2] += toFixed(c.z);
+    }
+
+private:
+    const SegmentReceivers& receivers_;
+    SplatStats& stats_;
+    int count_ = 0;
+    Vec3 y_[RayAccel::kPacket], ng_[RayAccel::kPacket], c_[RayAccel::kPacket];
+    int64_t* pixel_[RayAccel::kPacket];
+};
+
+}  // namespace
 
 void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
                   const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
@@ -78,6 +119,7 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
             cyl.originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
             int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
             const SegmentReceivers receivers(accel, ray);
+            PendingContributions pending(receivers, st);
 
             traverseCylinder(tree, samples, cyl, scratch[thread], [&](uint32_t i, float visibility) {
                 // Only samples in front of the ray's origin, inside the kernel, facing the photon.
@@ -92,12 +134,9 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
                 if (cosTheta >= 0.f) return;
                 Vec3 ng = decodeUnit(samples.geomNormal[i]);
                 if (glm::dot(ng, w) >= 0.f) return;
-                if (settings.visibility) {
-                    SegmentReceivers::Verdict verdict = receivers.judge(y, ng, st.visibilityRays);
-                    if (verdict != SegmentReceivers::kReceives) {
-                        ++st.refused[verdict];
-                        return;
-                    }
+                if (settings.visibility && !receivers.inFrontOfOrigin(y)) {
+                    ++st.refused[SegmentReceivers::kBehindOrigin];
+                    return;
                 }
 
                 // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V.
@@ -114,11 +153,14 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
                 Vec3 c = samples.weight[i] * f * ray.flux * scale;
                 if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
                 int64_t* px = &layer[size_t(samples.pixel[i]) * 3];
-                px[0] += toFixed(c.x);
-                px[1] += toFixed(c.y);
-                px[2] += toFixed(c.z);
-                ++st.contributions;
+                if (settings.visibility) {
+                    pending.add(y, ng, px, c);
+                } else {
+                    PendingContributions::addFixed(px, c);
+                    ++st.contributions;
+                }
             }, &st.traversal);
+            pending.flush();
         }
         reporter.advance(e - b);
     });

@@ -42,8 +42,13 @@ public:
     enum Verdict { kReceives = -1, kBehindOrigin = 0, kHidden = 1, kVerdictCount = 2 };
 
     SegmentReceivers(const RayAccel& accel, const PhotonRay& ray);
-    // y: position; ng: geometric normal on the side y is seen from. Counts its rays.
-    Verdict judge(const Vec3& y, const Vec3& ng, uint64_t& rays) const;
+    // Rule 1 for y.
+    bool inFrontOfOrigin(const Vec3& y) const {
+        return !hasOriginNormal_ || glm::dot(y - origin_, originNormal_) > 0.f;
+    }
+    // Rule 2 for up to RayAccel::kPacket samples at once (y: position; ng: geometric normal on
+    // the side y is seen from): bit i set when sample i is hidden from x(i−1).
+    uint32_t hidden(const Vec3* y, const Vec3* ng, int count) const;
 
 private:
     const RayAccel& accel_;
