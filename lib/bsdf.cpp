@@ -9,25 +9,29 @@ namespace rs {
 
 namespace {
 
-Vec3 schlick(const Vec3& f0, float cosTheta) {
+float schlickWeight(float cosTheta) {
     float m = std::clamp(1.f - cosTheta, 0.f, 1.f);
-    float m5 = (m * m) * (m * m) * m;
-    return f0 + (Vec3(1.f) - f0) * m5;
+    return (m * m) * (m * m) * m;
 }
 
-float ggxD(const Vec3& h, float alpha) {
+Vec3 schlick(const Vec3& f0, float cosTheta) { return f0 + (Vec3(1.f) - f0) * schlickWeight(cosTheta); }
+
+float ggxD(float cosH, float alpha) {
     float a2 = alpha * alpha;
-    float c2 = h.z * h.z;
+    float c2 = cosH * cosH;
     float d = c2 * (a2 - 1.f) + 1.f;
     return a2 / (kPi * d * d);
 }
 
-float ggxLambda(const Vec3& w, float alpha) {
-    float c2 = w.z * w.z;
+float ggxD(const Vec3& h, float alpha) { return ggxD(h.z, alpha); }
+
+float ggxLambda(float cosTheta, float alpha) {
+    float c2 = cosTheta * cosTheta;
     if (c2 >= 1.f) return 0.f;
     float tan2 = (1.f - c2) / std::max(c2, 1e-12f);
     return 0.5f * (std::sqrt(1.f + alpha * alpha * tan2) - 1.f);
 }
+float ggxLambda(const Vec3& w, float alpha) { return ggxLambda(w.z, alpha); }
 
 float ggxG1(const Vec3& w, float alpha) { return 1.f / (1.f + ggxLambda(w, alpha)); }
 
@@ -47,6 +51,11 @@ Vec3 sampleGgxVisibleNormal(const Vec3& wo, float alpha, Vec2 u) {
 Vec3 reflect(const Vec3& w, const Vec3& n) { return 2.f * glm::dot(w, n) * n - w; }
 
 }  // namespace
+
+GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha) {
+    float g = 1.f / (1.f + ggxLambda(cosO, alpha) + ggxLambda(cosI, alpha));
+    return {ggxD(cosH, alpha) * g / (4.f * cosO * cosI), schlickWeight(cosOH)};
+}
 
 float fresnelDielectric(float cosThetaI, float eta) {
     float sin2T = (1.f - cosThetaI * cosThetaI) / (eta * eta);
@@ -97,8 +106,8 @@ Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
     Vec3 f = diffuseWeight_ * albedo_ * kInvPi;
     if (hasGgx_) {
         Vec3 h = glm::normalize(wo + wi);
-        float g = 1.f / (1.f + ggxLambda(wo, alpha_) + ggxLambda(wi, alpha_));
-        f += schlick(f0_, glm::dot(wo, h)) * (ggxD(h, alpha_) * g / (4.f * wo.z * wi.z));
+        GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);
+        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
     }
     return f;
 }

@@ -31,6 +31,11 @@ public:
     // u: one number picks the lobe (or the Fresnel branch), two more the direction.
     BsdfSample sample(const Vec3& wo, float uLobe, Vec2 u, Transport mode) const;
     Vec3 albedo() const { return albedo_; }
+    // The parts eval() is made of, for eye samples that store them (eye.h's GlossyLobe).
+    Vec3 diffuseReflectance() const { return diffuseWeight_ * albedo_ * kInvPi; }  // the diffuse lobe's f
+    bool hasGlossyLobe() const { return hasGgx_; }
+    Vec3 fresnelAtNormal() const { return f0_; }
+    float ggxAlpha() const { return alpha_; }
     const Vec3& shadingNormal() const { return frame_.n; }
 
 private:
@@ -46,6 +51,14 @@ private:
     float alpha_ = 1.f;
     float eta_ = 1.f;  // glass: ηt/ηi for light leaving towards the side opposite wo
 };
+
+// The GGX lobe of eval(): with cosines to the shading normal of wo, wi (both > 0) and of the
+// half vector h, and wo·h, f = schlick(f0, wo·h) · dg, schlick(f0, c) = f0 + (1 − f0)·m5.
+struct GgxReflection {
+    float dg = 0.f;  // D(h)·G(wo, wi) / (4 cosθo cosθi)
+    float m5 = 0.f;  // (1 − wo·h)^5
+};
+GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha);
 
 // Exact dielectric Fresnel reflectance for cosθi (≥ 0) and relative IOR eta = ηt/ηi.
 float fresnelDielectric(float cosThetaI, float eta);

@@ -20,16 +20,15 @@ uint32_t quantize(float x) { return uint32_t(std::lround(std::clamp(x * 0.5f + 0
 
 }  // namespace
 
-uint32_t encodeUnit(const Vec3& n) {
+// The octahedral map's point p ∈ [−1, 1]² of a unit vector, and back.
+static Vec2 octahedral(const Vec3& n) {
     Vec3 a = glm::abs(n);
     float l1 = a.x + a.y + a.z;
     Vec2 p = l1 > 0.f ? Vec2(n.x, n.y) / l1 : Vec2(0.f);
-    if (n.z < 0.f) p = octWrap(p);
-    return quantize(p.x) | (quantize(p.y) << 16);
+    return n.z < 0.f ? octWrap(p) : p;
 }
 
-Vec3 decodeUnit(uint32_t e) {
-    Vec2 p(float(e & 0xffffu) / 65535.f * 2.f - 1.f, float(e >> 16) / 65535.f * 2.f - 1.f);
+static Vec3 fromOctahedral(Vec2 p) {
     Vec3 n(p.x, p.y, 1.f - std::abs(p.x) - std::abs(p.y));
     float t = std::max(-n.z, 0.f);
     n.x += n.x >= 0.f ? -t : t;
@@ -37,30 +36,88 @@ Vec3 decodeUnit(uint32_t e) {
     return glm::normalize(n);
 }
 
+uint32_t encodeUnit(const Vec3& n) {
+    const Vec2 p = octahedral(n);
+    return quantize(p.x) | (quantize(p.y) << 16);
+}
+
+Vec3 decodeUnit(uint32_t e) {
+    return fromOctahedral(Vec2(float(e & 0xffffu) / 65535.f * 2.f - 1.f, float(e >> 16) / 65535.f * 2.f - 1.f));
+}
+
+// 255 levels a coordinate, so that 0 (and with it every axis-aligned normal) is exact.
+uint16_t encodeUnit16(const Vec3& n) {
+    const Vec2 p = octahedral(n);
+    auto q = [](float x) { return uint32_t(std::lround(std::clamp(x * 0.5f + 0.5f, 0.f, 1.f) * 254.f)); };
+    return uint16_t(q(p.x) | q(p.y) << 8);
+}
+
+Vec3 decodeUnit16(uint16_t e) {
+    return fromOctahedral(Vec2(float(e & 0xffu), float(e >> 8)) * (2.f / 254.f) - Vec2(1.f));
+}
+
+uint32_t encodeRgb9e5(const Vec3& c) {
+    const float r = std::clamp(c.x, 0.f, kMaxRgb9e5), g = std::clamp(c.y, 0.f, kMaxRgb9e5),
+                b = std::clamp(c.z, 0.f, kMaxRgb9e5);
+    const float m = std::max(r, std::max(g, b));  // NaN channels clamp to 0 above
+    if (!(m > 0.f)) return 0;
+    int exponent = std::max(-16, int(std::floor(std::log2(m)))) + 16;  // biased, m < 2^(exponent − 15)
+    float scale = std::ldexp(1.f, 24 - exponent);
+    if (std::lround(m * scale) > 511) ++exponent, scale *= 0.5f;
+    exponent = std::min(exponent, 30);
+    auto q = [&](float v) { return uint32_t(std::min(511l, std::lround(v * scale))); };
+    return q(r) | q(g) << 9 | q(b) << 18 | uint32_t(exponent) << 27;
+}
+
+Vec3 EyeSamples::weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI) const {
+    const uint32_t r = bsdf[i];
+    if (!isGlossy(r)) return decodeRgb9e5(r);
+    const GlossyLobe& lobe = lobes[lobeIndex(r)];
+    Vec3 f = decodeRgb9e5(lobe.diffuse);
+    const Vec3 wo = decodeUnit(lobe.toViewer);
+    const float cosO = glm::dot(n, wo);
+    if (cosO <= 0.f) return f;
+    const Vec3 h = glm::normalize(wo + wi);
+    const GgxReflection g = ggxReflection(cosO, cosI, glm::dot(n, h), glm::dot(wo, h), lobe.alpha);
+    const Vec3 specular = decodeRgb9e5(lobe.specular), weight = decodeRgb9e5(lobe.weight);
+    return f + (specular + (weight - specular) * g.m5) * g.dg;
+}
+
+void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, uint32_t px, const Vec3& diffuse,
+                     const GlossyLobe* lobe) {
+    position.push_back(p);
+    normal.push_back(encodeUnit16(ns));
+    geomNormal.push_back(encodeUnit16(ng));
+    pixel.push_back(px);
+    if (!lobe) {
+        bsdf.push_back(encodeRgb9e5(diffuse));
+        return;
+    }
+    bsdf.push_back(kLobeFlag | uint32_t(lobes.size()));
+    lobes.push_back(*lobe);
+    lobes.back().diffuse = encodeRgb9e5(diffuse);
+}
+
 size_t EyeSamples::bytes() const {
-    return size() * (sizeof(Vec3) * 2 + sizeof(uint32_t) * 5 + sizeof(Vec2));
+    return size() * (sizeof(Vec3) + 2 * sizeof(uint16_t) + 2 * sizeof(uint32_t)) + lobes.size() * sizeof(GlossyLobe);
 }
 
 void EyeSamples::reserve(size_t n) {
     position.reserve(n);
     normal.reserve(n);
     geomNormal.reserve(n);
-    toViewer.reserve(n);
-    material.reserve(n);
-    uv.reserve(n);
     pixel.reserve(n);
-    weight.reserve(n);
+    bsdf.reserve(n);
 }
 
 void EyeSamples::append(const EyeSamples& o) {
+    const uint32_t lobeBase = uint32_t(lobes.size());
     position.insert(position.end(), o.position.begin(), o.position.end());
     normal.insert(normal.end(), o.normal.begin(), o.normal.end());
     geomNormal.insert(geomNormal.end(), o.geomNormal.begin(), o.geomNormal.end());
-    toViewer.insert(toViewer.end(), o.toViewer.begin(), o.toViewer.end());
-    material.insert(material.end(), o.material.begin(), o.material.end());
-    uv.insert(uv.end(), o.uv.begin(), o.uv.end());
     pixel.insert(pixel.end(), o.pixel.begin(), o.pixel.end());
-    weight.insert(weight.end(), o.weight.begin(), o.weight.end());
+    for (uint32_t r : o.bsdf) bsdf.push_back(isGlossy(r) ? kLobeFlag | (lobeIndex(r) + lobeBase) : r);
+    lobes.insert(lobes.end(), o.lobes.begin(), o.lobes.end());
 }
 
 template <class T>
@@ -74,11 +131,8 @@ void EyeSamples::permute(const std::vector<uint32_t>& order) {
     permuteArray(position, order);
     permuteArray(normal, order);
     permuteArray(geomNormal, order);
-    permuteArray(toViewer, order);
-    permuteArray(material, order);
-    permuteArray(uv, order);
     permuteArray(pixel, order);
-    permuteArray(weight, order);
+    permuteArray(bsdf, order);
 }
 
 }  // namespace rs
@@ -134,14 +188,15 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
                             out.film.albedo[pixel] += invSpp * bsdf.albedo();
                             out.film.normal[pixel] += invSpp * bsdf.shadingNormal();
                             if (reflectsNothing(m)) break;
-                            row.position.push_back(sp.p);
-                            row.normal.push_back(encodeUnit(bsdf.shadingNormal()));
-                            row.geomNormal.push_back(encodeUnit(glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng));
-                            row.toViewer.push_back(encodeUnit(wo));
-                            row.material.push_back(sp.material);
-                            row.uv.push_back(sp.uv);
-                            row.pixel.push_back(pixel);
-                            row.weight.push_back(weight);
+                            const Vec3 ng = glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng;
+                            const Vec3 diffuse = weight * bsdf.diffuseReflectance();
+                            if (bsdf.hasGlossyLobe()) {
+                                GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight),
+                                                encodeUnit(wo), bsdf.ggxAlpha()};
+                                row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
+                            } else {
+                                row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
+                            }
                             if (direct) {
                                 const uint64_t key = (uint64_t(pixel) << 24) ^ uint64_t(index);
                                 Sampler ds(st.seed, Stage::Direct, key);

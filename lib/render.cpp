@@ -162,7 +162,7 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
         // The light lands in the eye pass's film: emission, albedo, normal and (sampled)
         // direct light are already there.
         t = Timer();
-        splatPhotons(scene, accel, tree, eye.samples, photons, splat, eye.film, pool, reporter, &totals.splat);
+        splatPhotons(accel, tree, eye.samples, photons, splat, eye.film, pool, reporter, &totals.splat);
         stats.addTime("splat", t.seconds());
         stats.setCount("photon_mb", totals.photonMb);
         stats.setCount("photons_stored", double(totals.photonsStored));

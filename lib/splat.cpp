@@ -4,13 +4,12 @@
 // is bit-identical whatever the thread count or scheduling (STYLE rule 6).
 #include "splat.h"
 
+#include <algorithm>
 #include <mutex>
 
 #include "accel.h"
-#include "bsdf.h"
 #include "log.h"
 #include "parallel.h"
-#include "scene.h"
 
 namespace rs {
 
@@ -25,6 +24,38 @@ static_assert(int(kPhotonDirect) == int(kDirect) && int(kPhotonIndirect) == int(
 inline int64_t toFixed(float v) {
     double x = double(v) * kFixedScale;
     return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
+}
+
+// Bits of x spread to every third position (x < 2^10).
+inline uint32_t spreadBits(uint32_t x) {
+    x = (x | x << 16) & 0x030000ffu;
+    x = (x | x << 8) & 0x0300f00fu;
+    x = (x | x << 4) & 0x030c30c3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+}
+
+// The order in which photon rays are splatted: by the Morton code of the brick their hit lies
+// in, so that consecutive rays read the same part of the tree, the eye samples and the film
+// (most of a kernel's receivers lie around the hit). Ties keep the photon order. Any order
+// gives the same image: the film sums are integers.
+std::vector<uint32_t> coherentOrder(const PhotonMap& photons, const GridGeometry& g) {
+    const size_t n = photons.rays.size();
+    std::vector<uint64_t> keyed(n);
+    for (size_t i = 0; i < n; ++i) {
+        const PhotonRay& r = photons.rays[i];
+        const Vec3 hit = g.voxelFromWorld(r.origin + r.length * r.dir) / float(kBrickSize);
+        uint32_t code = 0;
+        for (int a = 0; a < 3; ++a) {
+            const float c = std::clamp(hit[a], 0.f, 1023.f);
+            code |= spreadBits(uint32_t(c == c ? c : 0.f)) << a;
+        }
+        keyed[i] = uint64_t(code) << 32 | uint64_t(i);
+    }
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<uint32_t> order(n);
+    for (size_t i = 0; i < n; ++i) order[i] = uint32_t(keyed[i]);
+    return order;
 }
 
 }  // namespace
@@ -90,7 +121,7 @@ private:
 
 }  // namespace
 
-void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
                   const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
                   Reporter& reporter, SplatStats* statsOut) {
     const GridGeometry& g = tree.geometry;
@@ -100,6 +131,7 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
     std::vector<TraversalScratch> scratch(threads);
     std::vector<SplatStats> stats(threads);
     const int64_t n = int64_t(photons.rays.size());
+    const std::vector<uint32_t> order = coherentOrder(photons, g);
 
     reporter.begin("splatting", n, "photons");
     pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
@@ -107,7 +139,7 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
         if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
         SplatStats& st = stats[thread];
         for (int64_t p = b; p < e; ++p) {
-            const PhotonRay& ray = photons.rays[p];
+            const PhotonRay& ray = photons.rays[order[size_t(p)]];
             const float h = ray.radius, h2 = h * h;
             const Vec3 o = ray.origin, w = ray.dir;
             Cylinder cyl;
@@ -129,28 +161,20 @@ void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree
                 if (t <= 0.f || t > end) return;
                 float d2 = glm::dot(oy, oy) - t * t;
                 if (d2 >= h2) return;
-                Vec3 n = decodeUnit(samples.normal[i]);
+                Vec3 n = decodeUnit16(samples.normal[i]);
                 float cosTheta = glm::dot(n, w);
                 if (cosTheta >= 0.f) return;
-                Vec3 ng = decodeUnit(samples.geomNormal[i]);
+                Vec3 ng = decodeUnit16(samples.geomNormal[i]);
                 if (glm::dot(ng, w) >= 0.f) return;
                 if (settings.visibility && !receivers.inFrontOfOrigin(y)) {
                     ++st.refused[SegmentReceivers::kBehindOrigin];
                     return;
                 }
 
-                // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V.
-                SurfacePoint sp;
-                sp.p = y;
-                sp.ng = ng;
-                sp.ns = n;
-                sp.uv = samples.uv[i];
-                sp.material = samples.material[i];
-                Vec3 wo = decodeUnit(samples.toViewer[i]);
-                Bsdf bsdf(scene, sp, wo);
-                Vec3 f = bsdf.eval(wo, -w);
+                // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
+                Vec3 f = samples.weightedF(i, n, -w, -cosTheta);
                 float scale = biweightKernel(std::max(d2, 0.f), h2) * -cosTheta * visibility;
-                Vec3 c = samples.weight[i] * f * ray.flux * scale;
+                Vec3 c = f * ray.flux * scale;
                 if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
                 int64_t* px = &layer[size_t(samples.pixel[i]) * 3];
                 if (settings.visibility) {

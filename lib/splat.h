@@ -16,7 +16,6 @@ namespace rs {
 class ThreadPool;
 class Reporter;
 class RayAccel;
-struct Scene;
 
 struct SplatStats {
     TraversalStats traversal;
@@ -71,7 +70,7 @@ struct SplatSettings {
 // Adds the photons' light to `film` (direct, indirect and caustic layers; pixel = eye
 // sample's pixel index). The result does not depend on the thread count: contributions are
 // summed as 64-bit fixed-point integers, whose sum does not depend on order.
-void splatPhotons(const Scene& scene, const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
                   const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
                   Reporter& reporter, SplatStats* stats = nullptr);
 

@@ -57,13 +57,51 @@ TEST(EyePass, DiffuseWallGetsSSamplesPerPixelOnItsSurface) {
     std::vector<int> perPixel(16 * 12, 0);
     for (size_t i = 0; i < eye.samples.size(); ++i) {
         EXPECT_NEAR(eye.samples.position[i].z, -1.f, 1e-5f);
-        EXPECT_NEAR(eye.samples.weight[i].x, 0.25f, 1e-7f);
-        EXPECT_GT(decodeUnit(eye.samples.normal[i]).z, 0.9999f);
-        Vec3 toViewer = glm::normalize(Vec3(0, 0, 2) - eye.samples.position[i]);
-        EXPECT_GT(glm::dot(toViewer, decodeUnit(eye.samples.toViewer[i])), 0.99999f);
+        // Lambert: weight 1/S × ρ/π for any light direction, to 2^-9.
+        const Vec3 f = eye.samples.weightedF(i, Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, 0.1f, 1.f)), 0.95f);
+        EXPECT_NEAR(f.x, 0.25f * 0.5f * kInvPi, 0.25f * 0.5f * kInvPi / 512.f);
+        EXPECT_EQ(decodeUnit16(eye.samples.normal[i]), Vec3(0, 0, 1)) << "axis-aligned normals are exact";
+        EXPECT_EQ(decodeUnit16(eye.samples.geomNormal[i]), Vec3(0, 0, 1));
         perPixel[eye.samples.pixel[i]]++;
     }
+    EXPECT_TRUE(eye.samples.lobes.empty()) << "Lambert samples need no glossy lobe";
     for (int c : perPixel) EXPECT_EQ(c, 4);
+}
+
+// A glossy sample keeps what its BSDF needs: weightedF agrees with Bsdf::eval × weight for
+// light from any direction above the surface, to the precision of the stored parts.
+TEST(EyePass, GlossySamplesReproduceTheirBsdf) {
+    for (MaterialKind kind : {MaterialKind::Glossy, MaterialKind::Mix}) {
+        Scene s;
+        uint32_t m = addMaterial(s, kind, Vec3(0.9f, 0.6f, 0.3f));
+        s.materials[m].roughness = 0.3f;
+        s.materials[m].metallic = 0.4f;
+        addQuad(s, {-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}, m);
+        s.computeBounds();
+        RayAccel accel(s, 1);
+        ThreadPool pool(1);
+        EyePassSettings st;
+        st.width = st.height = 4;
+        st.spp = 2;
+        const Vec3 eyePos(0, 0, 2);
+        EyePass eye = traceEyePass(s, accel, nullptr, lookingDownZ(eyePos), st, pool, silentReporter());
+        ASSERT_EQ(eye.samples.size(), 32u);
+        EXPECT_EQ(eye.samples.lobes.size(), 32u);
+        for (size_t i = 0; i < eye.samples.size(); ++i) {
+            SurfacePoint sp;
+            sp.p = eye.samples.position[i];
+            sp.ng = sp.ns = Vec3(0, 0, 1);
+            sp.material = m;
+            const Vec3 wo = glm::normalize(eyePos - sp.p);
+            Bsdf bsdf(s, sp, wo);
+            for (Vec3 wi : {Vec3(0.2f, 0.1f, 1.f), Vec3(-0.5f, 0.3f, 0.4f), Vec3(0.9f, -0.2f, 0.1f)}) {
+                wi = glm::normalize(wi);
+                const Vec3 want = 0.5f * bsdf.eval(wo, wi);  // weight 1/S
+                const Vec3 got = eye.samples.weightedF(i, decodeUnit16(eye.samples.normal[i]), wi, wi.z);
+                for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 0.01f * maxComponent(want)) << i;
+            }
+        }
+    }
 }
 
 // Samples are stratified in the pixel: the four samples of a pixel project to four
@@ -113,8 +151,10 @@ TEST(EyePass, GlassSlabPassesTheFresnelFractionWithUnitWeight) {
     double weight = 0;
     for (size_t i = 0; i < eye.samples.size(); ++i) {
         EXPECT_NEAR(eye.samples.position[i].z, -3.f, 1e-4f);
-        EXPECT_NEAR(eye.samples.weight[i].x, 0.25f, 1e-5f);
-        weight += eye.samples.weight[i].x;
+        // The stored f is weight × ρ/π, ρ = 0.5.
+        const float w = eye.samples.weightedF(i, Vec3(0, 0, 1), Vec3(0, 0, 1), 1.f).x / (0.5f * kInvPi);
+        EXPECT_NEAR(w, 0.25f, 0.25f / 256.f);
+        weight += w;
     }
     float R = fresnelDielectric(1.f, 1.5f);
     EXPECT_NEAR(weight / (64 * 64), (1 - R) / (1 + R), 0.01);
@@ -154,5 +194,8 @@ TEST(EyePass, ThreadCountDoesNotChangeSamples) {
     ASSERT_EQ(a.samples.size(), b.samples.size());
     EXPECT_EQ(0, std::memcmp(a.samples.position.data(), b.samples.position.data(), a.samples.size() * sizeof(Vec3)));
     EXPECT_EQ(a.samples.pixel, b.samples.pixel);
-    EXPECT_EQ(0, std::memcmp(a.samples.weight.data(), b.samples.weight.data(), a.samples.size() * sizeof(Vec3)));
+    EXPECT_EQ(a.samples.normal, b.samples.normal);
+    EXPECT_EQ(a.samples.bsdf, b.samples.bsdf);
+    ASSERT_EQ(a.samples.lobes.size(), b.samples.lobes.size());
+    EXPECT_EQ(0, std::memcmp(a.samples.lobes.data(), b.samples.lobes.data(), a.samples.lobes.size() * sizeof(GlossyLobe)));
 }

@@ -101,14 +101,7 @@ EyeSamples makeSamples(const Surfaces& s) {
     EyeSamples e;
     e.reserve(s.points.size());
     for (size_t i = 0; i < s.points.size(); ++i) {
-        e.position.push_back(s.grid.geometry.worldFromVoxel(s.points[i]));
-        e.normal.push_back(encodeUnit(s.normals[i]));
-        e.geomNormal.push_back(encodeUnit(s.normals[i]));
-        e.toViewer.push_back(encodeUnit(s.normals[i]));
-        e.material.push_back(0);
-        e.uv.push_back(Vec2(0.f));
-        e.pixel.push_back(uint32_t(i / 4));
-        e.weight.push_back(Vec3(0.25f));
+        e.add(s.grid.geometry.worldFromVoxel(s.points[i]), s.normals[i], s.normals[i], uint32_t(i / 4), Vec3(0.25f));
     }
     return e;
 }

@@ -29,14 +29,7 @@ GridGeometry makeGeometry(IVec3 dims, Vec3 origin = Vec3(-1.3f, 0.2f, 2.f), floa
 EyeSamples makeSamples(const GridGeometry& g, const std::vector<Vec3>& pVoxel) {
     EyeSamples s;
     for (size_t i = 0; i < pVoxel.size(); ++i) {
-        s.position.push_back(g.worldFromVoxel(pVoxel[i]));
-        s.normal.push_back(encodeUnit(Vec3(0, 0, 1)));
-        s.geomNormal.push_back(encodeUnit(Vec3(0, 0, 1)));
-        s.toViewer.push_back(encodeUnit(Vec3(0, 0, 1)));
-        s.material.push_back(0);
-        s.uv.push_back(Vec2(0.f));
-        s.pixel.push_back(uint32_t(i));
-        s.weight.push_back(Vec3(1.f));
+        s.add(g.worldFromVoxel(pVoxel[i]), Vec3(0, 0, 1), Vec3(0, 0, 1), uint32_t(i), Vec3(1.f));
     }
     return s;
 }

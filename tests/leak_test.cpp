@@ -48,20 +48,14 @@ std::vector<float> splatOne(const WallScene& w, const PhotonRay& ray, const std:
     OcclusionGrid occ = voxelizeCpu(w.scene, gridForBounds(w.scene.bounds, grid), pool, silentReporter());
     EyeSamples eye;
     for (size_t i = 0; i < at.size(); ++i) {
-        eye.position.push_back(at[i].first);
-        eye.normal.push_back(encodeUnit(at[i].second));
-        eye.geomNormal.push_back(encodeUnit(at[i].second));
-        eye.toViewer.push_back(encodeUnit(at[i].second));
-        eye.material.push_back(w.white);
-        eye.uv.push_back(Vec2(0.f));
-        eye.pixel.push_back(uint32_t(i));
-        eye.weight.push_back(Vec3(1.f));
+        const Vec3 f = w.scene.materials[w.white].baseColor * kInvPi;  // Lambert, weight 1
+        eye.add(at[i].first, at[i].second, at[i].second, uint32_t(i), f);
     }
     OcclusionTree tree = buildOcclusionTree(occ, eye, pool);  // reorders eye, pixels stay
     PhotonMap map;
     map.rays.push_back(ray);
     Film film(int(at.size()), 1);
-    splatPhotons(w.scene, accel, tree, eye, map, SplatSettings(), film, pool, silentReporter());
+    splatPhotons(accel, tree, eye, map, SplatSettings(), film, pool, silentReporter());
     std::vector<float> got;
     for (size_t i = 0; i < at.size(); ++i) got.push_back(film.layers[ray.cls][i].x);
     return got;

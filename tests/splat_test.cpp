@@ -172,14 +172,7 @@ TEST(SplatStage, ClosedRoomReflectsEmittedPowerTimesAlbedo) {
                     else if (axis == 1) p = {a, 1.f + side, b};
                     else p = {a, 1.f + b, side};
                     nrm[axis] = -side;
-                    eye.position.push_back(p);
-                    eye.normal.push_back(encodeUnit(nrm));
-                    eye.geomNormal.push_back(encodeUnit(nrm));
-                    eye.toViewer.push_back(encodeUnit(nrm));
-                    eye.material.push_back(wall);
-                    eye.uv.push_back(Vec2(0.f));
-                    eye.pixel.push_back(0);
-                    eye.weight.push_back(Vec3(da));
+                    eye.add(p, nrm, nrm, 0, da * s.materials[wall].baseColor * kInvPi);  // Lambert
                 }
             }
         }
@@ -191,7 +184,7 @@ TEST(SplatStage, ClosedRoomReflectsEmittedPowerTimesAlbedo) {
     ps.voxelSize = grid.geometry.voxelSize;
     PhotonMap photons = tracePhotons(s, accel, lights, ps, pool, silentReporter());
     Film film(1, 1);
-    splatPhotons(s, accel, tree, eye, photons, SplatSettings(), film, pool, silentReporter());
+    splatPhotons(accel, tree, eye, photons, SplatSettings(), film, pool, silentReporter());
     double reflected = film.layers[kDirect][0].x * kPi;
     double expected = rho * luminance(s.emittedPower());
     EXPECT_NEAR(reflected / expected, 1.0, 0.05);
