@@ -169,6 +169,9 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
         stats.setCount("radius_scale", ps.radiusScale);
         stats.setCount("splat_contributions", double(totals.splat.contributions));
         stats.setCount("traversal_nodes", double(totals.splat.traversal.nodes));
+        stats.setCount("traversal_occluders", double(totals.splat.traversal.occluders));
+        stats.setCount("traversal_samples_reached", double(totals.splat.traversal.samplesReached));
+        stats.setCount("traversal_samples_visited", double(totals.splat.traversal.samplesVisited));
         stats.setCount("splat_visibility_rays", double(totals.splat.visibilityRays));
         stats.setCount("splat_refused_behind_origin", double(totals.splat.refused[SegmentReceivers::kBehindOrigin]));
         stats.setCount("splat_refused_hidden", double(totals.splat.refused[SegmentReceivers::kHidden]));

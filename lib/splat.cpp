@@ -148,7 +148,9 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
             cyl.radius = h / g.voxelSize;
             const float end = ray.length + h * ray.reach;  // past the hit as far as the kernel lands
             cyl.length = end / g.voxelSize;
-            cyl.originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
+            // The traversal leaves out samples behind the origin's tangent plane (rule 1), unless
+            // there is no visibility at all.
+            cyl.originNormal = ray.originNormal && settings.visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
             int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
             const SegmentReceivers receivers(accel, ray);
             PendingContributions pending(receivers, st);

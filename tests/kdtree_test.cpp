@@ -166,7 +166,10 @@ std::vector<float> bruteForceVisibility(const OcclusionGrid& grid, const EyeSamp
     for (uint32_t s = 0; s < sampleCount; ++s) {
         Vec3 p = g.voxelFromWorld(samples.position[s]);
         IVec3 v(glm::floor(p));
-        if (!met(v) || axisDistance2(p - o) >= h * h) continue;
+        const float along = glm::dot(p - o, w);
+        if (!(along > 0.f && along <= cyl.length) || axisDistance2(p - o) >= h * h) continue;
+        if (hasNormal && glm::dot(p - o, n) <= 0.f) continue;
+        EXPECT_TRUE(met(v)) << "a sample inside the cylinder is in a met voxel";
         float x = project(p, U) - 0.5f, y = project(p, V) - 0.5f;
         int i = int(std::floor(x)), j = int(std::floor(y));
         float fx = x - std::floor(x), fy = y - std::floor(y);
@@ -548,7 +551,8 @@ TEST(OcclusionTreeTraversal, WallWithHoleLetsLightOnlyThroughTheHole) {
         size_t lit = 0, fullyLit = 0, shadowed = 0;
         for (uint32_t i = 0; i < scene.tree.sampleCount; ++i) {
             Vec3 p = scene.samples.position[i];
-            if (p.z < 17.f || distanceToAxis(cyl, p) >= cyl.radius) continue;
+            const float along = glm::dot(p - cyl.origin, cyl.dir);  // voxel size 1, origin 0
+            if (p.z < 17.f || distanceToAxis(cyl, p) >= cyl.radius || along > cyl.length) continue;
             // Where the line from the sample back along ω crosses the wall's mid-plane.
             Vec3 q = p - dir * (p.z - 16.5f) / dir.z;
             auto inHole = [&](float margin) {
