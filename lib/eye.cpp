@@ -28,13 +28,7 @@ static Vec2 octahedral(const Vec3& n) {
     return n.z < 0.f ? octWrap(p) : p;
 }
 
-static Vec3 fromOctahedral(Vec2 p) {
-    Vec3 n(p.x, p.y, 1.f - std::abs(p.x) - std::abs(p.y));
-    float t = std::max(-n.z, 0.f);
-    n.x += n.x >= 0.f ? -t : t;
-    n.y += n.y >= 0.f ? -t : t;
-    return glm::normalize(n);
-}
+static Vec3 fromOctahedral(Vec2 p) { return octahedralToUnit(p.x, p.y); }
 
 uint32_t encodeUnit(const Vec3& n) {
     const Vec2 p = octahedral(n);
@@ -52,9 +46,6 @@ uint16_t encodeUnit16(const Vec3& n) {
     return uint16_t(q(p.x) | q(p.y) << 8);
 }
 
-Vec3 decodeUnit16(uint16_t e) {
-    return fromOctahedral(Vec2(float(e & 0xffu), float(e >> 8)) * (2.f / 254.f) - Vec2(1.f));
-}
 
 uint32_t encodeRgb9e5(const Vec3& c) {
     const float r = std::clamp(c.x, 0.f, kMaxRgb9e5), g = std::clamp(c.y, 0.f, kMaxRgb9e5),

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "film.h"
@@ -19,7 +20,17 @@ namespace rs {
 uint32_t encodeUnit(const Vec3& n);
 Vec3 decodeUnit(uint32_t e);
 uint16_t encodeUnit16(const Vec3& n);
-Vec3 decodeUnit16(uint16_t e);
+// The unit vector of the octahedral map's point (x, y) ∈ [−1, 1]².
+inline Vec3 octahedralToUnit(float x, float y) {
+    Vec3 n(x, y, 1.f - std::abs(x) - std::abs(y));
+    float t = std::max(-n.z, 0.f);
+    n.x += n.x >= 0.f ? -t : t;
+    n.y += n.y >= 0.f ? -t : t;
+    return glm::normalize(n);
+}
+inline Vec3 decodeUnit16(uint16_t e) {  // inline: the splat decodes two a contribution
+    return octahedralToUnit(float(e & 0xffu) * (2.f / 254.f) - 1.f, float(e >> 8) * (2.f / 254.f) - 1.f);
+}
 
 // A non-negative RGB in 32 bits with a shared exponent (9-bit mantissas, 5-bit exponent):
 // relative error under 2^-9 of the largest channel, values up to kMaxRgb9e5 (larger ones are
@@ -27,8 +38,10 @@ Vec3 decodeUnit16(uint16_t e);
 constexpr float kMaxRgb9e5 = 32704.f;
 uint32_t encodeRgb9e5(const Vec3& c);
 inline Vec3 decodeRgb9e5(uint32_t e) {
-    const int exponent = int(e >> 27);
-    const float scale = std::ldexp(1.f, exponent - 24);  // 2^(exponent − bias 15 − 9 mantissa bits)
+    // 2^(exponent − bias 15 − 9 mantissa bits), built as a float's bits (exponent − 24 ≥ −24).
+    const uint32_t bits = uint32_t(int(e >> 27) - 24 + 127) << 23;
+    float scale;
+    std::memcpy(&scale, &bits, sizeof scale);
     return Vec3(float(e & 511u), float(e >> 9 & 511u), float(e >> 18 & 511u)) * scale;
 }
 

@@ -97,8 +97,8 @@ private:
 class Builder {
 public:
     Builder(const OcclusionGrid& grid, const SummedAreaTable& sat, const std::vector<uint64_t>& sampleKeys,
-            std::vector<uint32_t>& order, OcclusionTree& tree)
-        : grid_(grid), sat_(sat), keys_(sampleKeys), order_(order), tree_(tree),
+            const std::vector<uint8_t>& octant, std::vector<uint32_t>& order, OcclusionTree& tree)
+        : grid_(grid), sat_(sat), keys_(sampleKeys), octant_(octant), order_(order), tree_(tree),
           brickDims_((grid.geometry.dims + IVec3(kBrickSize - 1)) / kBrickSize) {}
 
     void build(const Box& box, int depth) {
@@ -209,7 +209,19 @@ private:
         RS_CHECK(order_.size() + size_t(to - from) < (size_t(1) << 32));
         brick.firstSample = uint32_t(order_.size());
         brick.sampleCount = uint32_t(to - from);
-        for (auto it = from; it != to; ++it) order_.push_back(uint32_t(*it & 0xffffffffu));
+        // By octant (stable: sample order within one).
+        uint32_t count[8] = {};
+        for (auto it = from; it != to; ++it) ++count[octant_[*it & 0xffffffffu]];
+        uint32_t start[8] = {};
+        for (int k = 1; k < 8; ++k) start[k] = start[k - 1] + count[k - 1];
+        if (brick.divided())
+            for (int k = 1; k < 8; ++k) brick.octantStart[k - 1] = uint16_t(start[k]);
+        order_.resize(order_.size() + brick.sampleCount);
+        uint32_t* out = &order_[brick.firstSample];
+        for (auto it = from; it != to; ++it) {
+            const uint32_t i = uint32_t(*it & 0xffffffffu);
+            out[brick.divided() ? start[octant_[i]]++ : uint32_t(it - from)] = i;
+        }
         RS_CHECK(tree_.bricks.size() < (size_t(1) << 32));
         push(Node::brickLeaf(uint32_t(tree_.bricks.size())));
         tree_.bricks.push_back(brick);
@@ -218,6 +230,7 @@ private:
     const OcclusionGrid& grid_;
     const SummedAreaTable& sat_;
     const std::vector<uint64_t>& keys_;
+    const std::vector<uint8_t>& octant_;
     std::vector<uint32_t>& order_;
     OcclusionTree& tree_;
     IVec3 brickDims_;
@@ -285,7 +298,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     };
     const size_t n = samples.size();
     std::vector<uint64_t> keys(n);
-    std::vector<uint8_t> inside(n);
+    std::vector<uint8_t> inside(n), octant(n);
     pool.parallelFor(int64_t(n), 4096, [&](int64_t b, int64_t e, int) {
         for (int64_t i = b; i < e; ++i) {
             Vec3 p = g.voxelFromWorld(samples.position[size_t(i)]);
@@ -293,6 +306,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
             bool ok = isFinite(p) && f.x >= 0.f && f.y >= 0.f && f.z >= 0.f && f.x < float(g.dims.x) &&
                       f.y < float(g.dims.y) && f.z < float(g.dims.z);
             inside[size_t(i)] = ok;
+            if (ok) octant[size_t(i)] = uint8_t((int(f.x) >> 1 & 1) | (int(f.y) >> 1 & 1) << 1 | (int(f.z) >> 1 & 1) << 2);
             keys[size_t(i)] = ok ? uint64_t(brickIndex(int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
         }
     });
@@ -323,7 +337,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     tree.geometry = g;
     std::vector<uint32_t> order;
     order.reserve(n);
-    Builder builder(grid, sat, keys, order, tree);
+    Builder builder(grid, sat, keys, octant, order, tree);
     builder.build({IVec3(0), brickDims}, 0);
     RS_CHECK(order.size() == keys.size());
     tree.sampleCount = uint32_t(order.size());

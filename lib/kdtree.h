@@ -65,13 +65,23 @@ struct VoxelOcclusion {
 
 // A brick's payload. Voxel (x, y, z) of the brick (0…3 each, from the brick's min corner) is
 // bit x + 4y + 16z of `occupied`; the occupied voxels' occlusion is stored from `firstVoxel` on,
-// in bit order; the brick's eye samples are [firstSample, firstSample + sampleCount).
+// in bit order; the brick's eye samples are [firstSample, firstSample + sampleCount), ordered
+// by the octant of the brick (2×2×2 voxels: x/2 + 2·(y/2) + 4·(z/2)) their voxel is in, so
+// that a cylinder can skip the octants it does not reach: octant k's samples start at
+// firstSample + octantStart[k − 1] (0 for k = 0) and end where the next one starts
+// (sampleCount for k = 7). A brick of more than 65535 samples is not divided (all 0).
 struct Brick {
     uint64_t occupied = 0;
     uint32_t firstVoxel = 0;
     uint32_t firstSample = 0;
     uint32_t sampleCount = 0;
-    uint32_t pad = 0;  // no indeterminate bytes: trees compare with memcmp
+    uint16_t octantStart[7] = {};
+    uint16_t pad = 0;  // no indeterminate bytes: trees compare with memcmp
+
+    static constexpr uint32_t kMaxDivided = 65535;
+    bool divided() const { return sampleCount <= kMaxDivided; }
+    uint32_t octantBegin(int k) const { return firstSample + (k == 0 || !divided() ? 0u : octantStart[k - 1]); }
+    uint32_t octantEnd(int k) const { return k == 7 || !divided() ? firstSample + sampleCount : octantBegin(k + 1); }
 };
 
 // One 64-bit word:

@@ -324,6 +324,20 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
         return mask;
     };
 
+    // Whether octant k of a brick (2×2×2 voxels, its bounding sphere) can hold a reached
+    // sample: it reaches into the depth range (0, L], within h of the axis, in front of the
+    // origin's tangent plane. It only skips per-sample tests, which decide.
+    const float octantRadius = 0.5f * std::sqrt(12.f) + 1e-3f;
+    auto octantMayBeReached = [&](const StackEntry& e, int k) {
+        const Vec3 c(float(e.lo[0] + 2 * (k & 1) + 1), float(e.lo[1] + (k & 2) + 1), float(e.lo[2] + (k >> 1 & 2) + 1));
+        const Vec3 d = c - o;
+        const float along = glm::dot(d, w);
+        if (along + octantRadius <= 0.f || along - octantRadius > L) return false;
+        if (hasNormal && glm::dot(d, n) + octantRadius <= 0.f) return false;
+        const float reach = cyl.radius + octantRadius;
+        return glm::dot(d, d) - along * along < reach * reach;
+    };
+
     // Early exit: every cell the node's points project to (and their bilinear
     // neighbours) was full before the node's first slice.
     auto prunable = [&](const StackEntry& e) {
@@ -402,7 +416,11 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
                     if (!surelyMet(Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f)) && !voxelMet(x, y, z)) continue;
                     addOccluder(x, y, z, tree.voxels[brick.firstVoxel + rank]);
                 }
-                for (uint32_t i = brick.firstSample, end = i + brick.sampleCount; i < end; ++i) {
+                for (int k = brick.divided() ? 0 : 7; k < 8; ++k) {
+                    const uint32_t first = k == 7 && !brick.divided() ? brick.firstSample : brick.octantBegin(k);
+                    const uint32_t last = brick.octantEnd(k);
+                    if (first == last || (brick.divided() && !octantMayBeReached(e, k))) continue;
+                    for (uint32_t i = first; i < last; ++i) {
                     const Vec3 p = (eye.position[i] - g.origin) * invVoxel;
                     const Vec3 d = p - o;
                     const float along = glm::dot(d, w);
@@ -415,6 +433,7 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
                     float vv = (p[V] - o[V]) - kV * (p[N] - o[N]);
                     s.samples.push_back({i, sliceOf(v[N]), u, vv});
                     ++st.samplesReached;
+                    }
                 }
                 break;
             }
@@ -457,6 +476,24 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
         cell(i0 + 1, j0 + 1, fx * fy);
         return den > 0.f ? 1.f - num / den : 1.f;
     };
+    // A sample none of whose four bilinear cells holds an occluder reads 0 whatever its slice:
+    // V = 1 at once. Only the others go through the slice sweep.
+    auto touched = [&](int i, int j) {
+        return i >= 0 && j >= 0 && i < sizeU && j < sizeV && s.fill[size_t(i) + size_t(sizeU) * size_t(j)].stamp == stamp;
+    };
+    if (!s.occluders.empty()) {
+        size_t kept = 0;
+        for (const SampleEvent& ev : s.samples) {
+            const int i0 = int(std::floor(ev.u - 0.5f)) + halfU, j0 = int(std::floor(ev.v - 0.5f)) + halfV;
+            if (touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1)) {
+                s.samples[kept++] = ev;
+            } else {
+                visit(ev.index, 1.f);
+                ++st.samplesVisited;
+            }
+        }
+        s.samples.resize(kept);
+    }
     if (s.occluders.empty()) {
         for (const SampleEvent& ev : s.samples) visit(ev.index, 1.f);
         st.samplesVisited = s.samples.size();
