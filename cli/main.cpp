@@ -14,14 +14,14 @@
 #include <string>
 #include <vector>
 
-#include "error.h"
-#include "gpu_context.h"
-#include "grid_stage.h"
-#include "log.h"
-#include "parallel.h"
+#include "core/error.h"
+#include "grid/gpu_context.h"
+#include "grid/grid_stage.h"
+#include "core/log.h"
+#include "core/parallel.h"
 #include "render.h"
-#include "scene.h"
-#include "stats.h"
+#include "scene/scene.h"
+#include "core/stats.h"
 
 using namespace rs;
 
@@ -142,6 +142,7 @@ struct Option {
     std::string arg;   // "N", or "" for a switch
     std::string help;
     std::function<void(const std::string&)> set;
+    std::string shortName = "";  // "-o", or none
 };
 
 template <class T>
@@ -207,7 +208,7 @@ public:
     void printHelp() const {
         std::printf("usage: %s\n\n%s\n\noptions:\n", usage_.c_str(), summary_.c_str());
         for (const Option& o : options_) {
-            std::string left = o.name + (o.arg.empty() ? "" : " " + o.arg);
+            std::string left = (o.shortName.empty() ? "" : o.shortName + ", ") + o.name + (o.arg.empty() ? "" : " " + o.arg);
             std::printf("  %-22s %s\n", left.c_str(), o.help.c_str());
         }
         std::printf("  %-22s %s\n", "-h, --help", "show this help");
@@ -216,7 +217,7 @@ public:
 private:
     const Option* find(const std::string& name) const {
         for (const Option& o : options_)
-            if (o.name == name || (o.name == "--output" && name == "-o")) return &o;
+            if (o.name == name || (!o.shortName.empty() && o.shortName == name)) return &o;
         return nullptr;
     }
     std::string usage_, summary_;
@@ -269,7 +270,7 @@ int cmdRender(int argc, char** argv) {
                 "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
                 "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
                 "atomically: a failed run leaves no file behind.");
-    cmd.add({"--output", "FILE", "OpenEXR output (also -o)", [&](const std::string& v) { cfg.output = v; }});
+    cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});
     cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
@@ -342,7 +343,7 @@ int cmdRender(int argc, char** argv) {
 int cmdInfo(int argc, char** argv) {
     bool gpu = false;
     Command cmd("raysplat info SCENE", "Loads SCENE and prints what the renderer sees in it.");
-    cmd.add({"--gpu", "", "also report the EGL device the voxelizer would use (not built yet)", [&](const std::string&) { gpu = true; }});
+    cmd.add({"--gpu", "", "also report the EGL device the voxelizer would use", [&](const std::string&) { gpu = true; }});
     bool help;
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
     if (help) return 0;
@@ -398,7 +399,7 @@ int cmdVoxelize(int argc, char** argv) {
                 "normal (vec3s) and occ_px, occ_nx, occ_py, occ_ny, occ_pz, occ_nz (count/16), plus metadata (dims,\n"
                 "voxel size, origin, voxelizer, cache key). The file opens in Blender (Add > Volume > Import\n"
                 "OpenVDB) and overlays the scene imported with Blender's glTF importer. Written atomically.");
-    cmd.add({"--output", "FILE", "the .vdb to write (also -o)", [&](const std::string& v) { cfg.vdb = v; }});
+    cmd.add({"--output", "FILE", "the .vdb to write", [&](const std::string& v) { cfg.vdb = v; }, "-o"});
     addGridOptions(cmd, cfg);
     cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: all cores); the grid does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});

@@ -1,5 +1,5 @@
 #version 450 core
-// Voxelizer fragment stage (DESIGN §5, paper §4): one fragment = one sub-sample (4×4 per
+// Voxelizer fragment stage (docs/design.md §5, paper §4): one fragment = one sub-sample (4×4 per
 // voxel face). It sets the bit of the fragment's slice within the current interval of at
 // most 64 slices in a 64-bit mask; glLogicOp(GL_OR) accumulates all triangles.
 // RG = triangles whose geometric normal points along +axis, BA = along −axis.

@@ -1,5 +1,5 @@
 #version 450 core
-// Voxelizer vertex stage (DESIGN §5, paper §4): orthographic projection along axis uAxis.
+// Voxelizer vertex stage (docs/design.md §5, paper §4): orthographic projection along axis uAxis.
 // Positions arrive in voxel space, snapped on the CPU to 1/1024 voxel (= 1/256 pixel at
 // 4×4 supersampling, the rasterizer's sub-pixel precision), and this transform is exact in
 // float: pixel = 4·p is exact, the viewport (uViewportSize) is a power of two, so NDC and

@@ -3,7 +3,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "error.h"
+#include "core/error.h"
+#include "grid/occlusion_grid.h"
 
 namespace rs {
 
@@ -87,7 +88,7 @@ void RenderConfig::validate() const {
 }
 
 void RenderConfig::validateGrid() const {
-    requireRange("--grid", grid, 1, 4096);
+    requireRange("--grid", grid, 1, kMaxGridResolution);
     if (voxelizer != "auto" && voxelizer != "gpu" && voxelizer != "cpu")
         throw Error(ErrorKind::Config, "--voxelizer " + voxelizer + ": unknown voxelizer (auto, gpu, cpu)");
     if (!vdb.empty()) {

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "film.h"
+#include "output/film.h"
 
 namespace rs {
 
@@ -47,7 +47,7 @@ struct RenderConfig {
     float alpha = 2.f / 3.f;
     float exposure = 0.f;    // PNG preview, stops
 
-    // Photons (DESIGN §8): total M, the split direct/indirect/caustic, the photons wanted
+    // Photons (docs/design.md §7): total M, the split direct/indirect/caustic, the photons wanted
     // under a kernel (k) and the radius clamps in voxels, per class.
     DirectMethod direct = DirectMethod::Sample;
     // Light samples (and as many BSDF samples) per eye sample for direct light by sampling;
@@ -69,7 +69,7 @@ struct RenderConfig {
     float minRadius[3] = {1.f, 6.f, 1.f};
     float maxRadius[3] = {16.f, 24.f, 16.f};
 
-    // Occlusion grid (DESIGN §5–6).
+    // Occlusion grid (docs/design.md §5–6).
     int grid = 192;                  // voxels along the scene's longest axis, 1..4096
     std::string voxelizer = "auto";  // auto (GPU, CPU when EGL is unusable), gpu, cpu
     std::string vdb;                 // optional: write the grid used as .vdb

@@ -1,4 +1,4 @@
-// The pipeline, in order (DESIGN §1):
+// The pipeline, in order (docs/design.md §1):
 //   scene → Embree BVH + light sampler
 //   splat methods: occlusion grid (voxelizer or cache), then passes of
 //                  (eye pass [+ direct light by sampling] → occlusion tree → photon tracing
@@ -10,15 +10,15 @@
 
 #include <cstdio>
 
-#include "accel.h"
-#include "eye.h"
-#include "grid_stage.h"
-#include "kdtree.h"
-#include "lights.h"
-#include "parallel.h"
-#include "path.h"
-#include "photons.h"
-#include "splat.h"
+#include "scene/accel.h"
+#include "splat/eye.h"
+#include "grid/grid_stage.h"
+#include "splat/kdtree.h"
+#include "scene/lights.h"
+#include "core/parallel.h"
+#include "path/path.h"
+#include "splat/photons.h"
+#include "splat/splat.h"
 
 #ifndef RAYSPLAT_VERSION
 #define RAYSPLAT_VERSION "dev"
@@ -106,7 +106,7 @@ struct SplatTotals {
 Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
                  int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats,
                  StagedFiles* outputs) {
-    // The occlusion grid, once (DESIGN §5–6). Without visibility the tree indexes the eye
+    // The occlusion grid, once (docs/design.md §5–6). Without visibility the tree indexes the eye
     // samples over an empty grid: nothing occludes.
     OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats, outputs);
     if (cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
@@ -124,7 +124,7 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
     SplatTotals totals;
 
     // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
-    // new photons (a fresh range of paths) with shrunk kernels, splatted (DESIGN §4, §7–9).
+    // new photons (a fresh range of paths) with shrunk kernels, splatted (docs/design.md §4, §7–9).
     return renderPasses(cfg, width, height, reporter, stats, [&](int pass) {
         Timer t;
         es.firstSample = pass * es.spp;
@@ -149,7 +149,7 @@ Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& 
             reporter.warn(scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
 
         t = Timer();
-        ps.firstPath = uint64_t(pass) << 40;  // 2^40 paths a pass: ranges never overlap
+        ps.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
         ps.radiusScale = passRadiusScale(pass, cfg.alpha);
         PhotonMap photons = tracePhotons(scene, accel, lights, ps, pool, reporter);
         stats.addTime("photons", t.seconds());

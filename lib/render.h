@@ -1,13 +1,13 @@
-// The whole pipeline on one page (DESIGN §1): render() calls the stages in order.
+// The whole pipeline on one page (docs/design.md §1): render() calls the stages in order.
 #pragma once
 
 #include <memory>
 
 #include "config.h"
-#include "film.h"
-#include "log.h"
-#include "scene.h"
-#include "stats.h"
+#include "output/film.h"
+#include "core/log.h"
+#include "scene/scene.h"
+#include "core/stats.h"
 
 namespace rs {
 

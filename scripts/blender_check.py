@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks with Blender (bpy, Blender as a Python module) that a raysplat .vdb loads and
-overlays the glTF scene it was made from (DESIGN §6).
+overlays the glTF scene it was made from (docs/design.md §5).
 
 usage: blender_check.py SCENE.gltf GRID.vdb
        blender_check.py --scene SCENE.gltf [--vdb OUT.vdb] [--grid N]

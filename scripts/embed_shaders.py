@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Embeds GLSL files into a C++ header (STYLE rule 9: the binary runs with nothing installed).
+"""Embeds GLSL files into a C++ header (docs/design.md §1: the binary runs with nothing installed).
 
 Usage: embed_shaders.py OUTPUT.h glsl/a.vert glsl/b.frag ...
 Each shader is looked up by "glsl/<file name>" (lib/shaders.cpp); its text is written as

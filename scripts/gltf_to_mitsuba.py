@@ -6,7 +6,7 @@
 
 Writes OUTDIR/scene.xml and one binary PLY per glTF primitive in OUTDIR/meshes/.
 The glTF is read here with numpy, independently of raysplat's loader, and mapped with
-the rules of DESIGN §3 so that both renderers see the same scene:
+the rules of docs/design.md §3 so that both renderers see the same scene:
 
   glTF material                          Mitsuba 3
   metallic 0, roughness 1                twosided diffuse, reflectance = baseColor
@@ -168,7 +168,7 @@ def rgb(values):
 
 
 def material_xml(mat, name):
-    """(bsdf XML, emitter XML or '') for a glTF material following DESIGN §3."""
+    """(bsdf XML, emitter XML or '') for a glTF material following docs/design.md §3."""
     pbr = mat.get("pbrMetallicRoughness", {})
     base = pbr.get("baseColorFactor", [1, 1, 1, 1])
     metallic = min(max(float(pbr.get("metallicFactor", 1.0)), 0.0), 1.0)

@@ -3,9 +3,9 @@
 
 Bad input (broken scenes, absurd settings, unwritable outputs) must end with exit code 1 --
 never a crash signal -- one stderr line "raysplat: error: ..." naming the file and the glTF
-object, and no output file or temporary left behind (DESIGN §3, §10; STYLE rule 3). Help
+object, and no output file or temporary left behind (docs/design.md §3, §10; errors: docs/design.md §10). Help
 and usage, a good render's three outputs (EXR magic, PNG signature and size, stats JSON),
-and bit-identical pixels with 1 and 2 threads (STYLE rule 6).
+and bit-identical pixels with 1 and 2 threads (determinism: docs/design.md §2).
 
 Stdlib only. Prints one line per test and closes with "N passed, M failed"; exits 1 on
 any failure.
@@ -260,7 +260,7 @@ def bad_setting_tests():
         case("--light-samples 0", ["--light-samples", "0", "--width", "16"], "--light-samples"),
         case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
         # --quiet: these runs fail only when they write, after the progress lines of the render.
-        # DESIGN §10: a failed run leaves no output, so neither may the outputs written
+        # docs/design.md §10: a failed run leaves no output, so neither may the outputs written
         # before the one that fails.
         case("EXR directory does not exist", ["--width", "8", "--spp", "1", "--quiet"],
              missing + ".exr", exr=missing + ".exr"),

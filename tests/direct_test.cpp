@@ -6,8 +6,8 @@
 
 #include <cstring>
 
-#include "bsdf.h"
-#include "log.h"
+#include "scene/bsdf.h"
+#include "core/log.h"
 #include "render.h"
 #include "test_scenes.h"
 

@@ -3,12 +3,12 @@
 
 #include <cstring>
 
-#include "accel.h"
-#include "bsdf.h"
-#include "eye.h"
-#include "log.h"
-#include "parallel.h"
-#include "sampling.h"
+#include "scene/accel.h"
+#include "scene/bsdf.h"
+#include "splat/eye.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "core/sampling.h"
 #include "test_scenes.h"
 
 using namespace rs;

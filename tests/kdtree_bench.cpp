@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <random>
 
-#include "kdtree.h"
-#include "kdtree_traverse.h"
-#include "stats.h"
+#include "splat/kdtree.h"
+#include "splat/kdtree_traverse.h"
+#include "core/stats.h"
 
 using namespace rs;
 

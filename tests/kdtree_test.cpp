@@ -10,8 +10,8 @@
 #include <random>
 #include <set>
 
-#include "kdtree.h"
-#include "kdtree_traverse.h"
+#include "splat/kdtree.h"
+#include "splat/kdtree_traverse.h"
 
 using namespace rs;
 

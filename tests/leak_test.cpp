@@ -8,16 +8,16 @@
 
 #include <cstdlib>
 
-#include "accel.h"
-#include "eye.h"
-#include "kdtree.h"
-#include "log.h"
-#include "parallel.h"
-#include "photons.h"
+#include "scene/accel.h"
+#include "splat/eye.h"
+#include "splat/kdtree.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "splat/photons.h"
 #include "render.h"
-#include "splat.h"
+#include "splat/splat.h"
 #include "test_scenes.h"
-#include "voxelize.h"
+#include "grid/voxelize.h"
 
 using namespace rs;
 using namespace rs::test;

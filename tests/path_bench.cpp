@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "parallel.h"
+#include "core/parallel.h"
 #include "render.h"
 
 int main() {

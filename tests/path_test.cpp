@@ -4,12 +4,12 @@
 
 #include <cstring>
 
-#include "accel.h"
-#include "bsdf.h"
-#include "lights.h"
-#include "path.h"
+#include "scene/accel.h"
+#include "scene/bsdf.h"
+#include "scene/lights.h"
+#include "path/path.h"
 #include "render.h"
-#include "sampling.h"
+#include "core/sampling.h"
 #include "test_scenes.h"
 
 using namespace rs;

@@ -4,12 +4,12 @@
 
 #include <cstring>
 
-#include "accel.h"
-#include "lights.h"
-#include "log.h"
-#include "parallel.h"
-#include "photons.h"
-#include "qmc.h"
+#include "scene/accel.h"
+#include "scene/lights.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "splat/photons.h"
+#include "core/qmc.h"
 #include "test_scenes.h"
 
 using namespace rs;

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "error.h"
-#include "log.h"
-#include "scene.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "scene/scene.h"
 #include "test_scenes.h"
 
 using namespace rs;
@@ -422,9 +422,9 @@ TEST(DataScenes, DirectLightDataUriPointLightAndCamera) {
 // NVIDIA's nvpro Cornell box (Iray exporter): 16 732 triangles in the file, emissive ceiling
 // panel with emissiveFactor [3, 3, 3], a 10 m room whose 5 cm thick walls reach ±5.05.
 TEST(SharedScenes, NvproCornellBoxLoads) {
-    const char* shared = std::getenv("RAYSPLAT_SHARED");
-    if (!shared || !*shared) GTEST_SKIP() << "RAYSPLAT_SHARED is not set";
-    std::string path = (fs::path(shared) / "scenes" / "nvpro-cornellbox" / "cornellBox.gltf").string();
+    const char* extra = std::getenv("RAYSPLAT_EXTRA_SCENES");
+    if (!extra || !*extra) GTEST_SKIP() << "RAYSPLAT_EXTRA_SCENES (a folder of scenes from elsewhere) is not set";
+    std::string path = (fs::path(extra) / "nvpro-cornellbox" / "cornellBox.gltf").string();
     if (!fs::exists(path)) GTEST_SKIP() << path << " is absent";
     Scene s = loadScene(path, silentReporter());
     EXPECT_GT(s.triangleCount(), 16000u);  // degenerate (zero-area) sphere pole triangles are dropped

@@ -4,16 +4,16 @@
 
 #include <cstring>
 
-#include "eye.h"
-#include "kdtree.h"
-#include "lights.h"
-#include "log.h"
-#include "parallel.h"
-#include "photons.h"
+#include "splat/eye.h"
+#include "splat/kdtree.h"
+#include "scene/lights.h"
+#include "core/log.h"
+#include "core/parallel.h"
+#include "splat/photons.h"
 #include "render.h"
-#include "splat.h"
+#include "splat/splat.h"
 #include "test_scenes.h"
-#include "voxelize.h"
+#include "grid/voxelize.h"
 
 using namespace rs;
 using namespace rs::test;

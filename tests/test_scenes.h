@@ -10,9 +10,9 @@
 #include <string>
 
 #include "config.h"
-#include "log.h"
+#include "core/log.h"
 #include "render.h"
-#include "scene.h"
+#include "scene/scene.h"
 
 namespace rs::test {
 

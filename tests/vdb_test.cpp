@@ -13,11 +13,11 @@
 #include <set>
 #include <tuple>
 
-#include "error.h"
-#include "grid_stage.h"
+#include "core/error.h"
+#include "grid/grid_stage.h"
 #include "test_scenes.h"
-#include "vdb_io.h"
-#include "voxelize.h"
+#include "grid/vdb_io.h"
+#include "grid/voxelize.h"
 
 using namespace rs;
 using rs::test::TempDir;

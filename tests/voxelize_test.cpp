@@ -1,4 +1,4 @@
-// Voxelizer tests (DESIGN §5): both voxelizers against analytic coverage of simple
+// Voxelizer tests (docs/design.md §5): both voxelizers against analytic coverage of simple
 // surfaces, the mean normal of a sphere, and the GPU against the CPU reference on the
 // project's scenes and random triangle soups. GPU tests skip when EGL is unavailable.
 #include <gtest/gtest.h>
@@ -9,11 +9,11 @@
 #include <filesystem>
 #include <random>
 
-#include "error.h"
-#include "gpu_context.h"
-#include "shaders.h"
+#include "core/error.h"
+#include "grid/gpu_context.h"
+#include "grid/shaders.h"
 #include "test_scenes.h"
-#include "voxelize.h"
+#include "grid/voxelize.h"
 
 using namespace rs;
 

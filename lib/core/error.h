@@ -1,0 +1,34 @@
+// The one error type of the library. Only cli/ catches it; the message is one line that
+// names the file and object the problem was found in.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+namespace rs {
+
+enum class ErrorKind { Io, Scene, Config, Gpu, Embree, Internal };
+
+class Error : public std::runtime_error {
+public:
+    Error(ErrorKind kind, const std::string& message)
+        : std::runtime_error(message), kind_(kind) {}
+    ErrorKind kind() const { return kind_; }
+
+private:
+    ErrorKind kind_;
+};
+
+// Broken invariants are bugs, not user errors: abort with the place.
+#define RS_CHECK(cond)                                                              \
+    do {                                                                            \
+        if (!(cond)) {                                                              \
+            std::fprintf(stderr, "raysplat: internal check failed: %s (%s:%d)\n",  \
+                         #cond, __FILE__, __LINE__);                                \
+            std::abort();                                                           \
+        }                                                                           \
+    } while (0)
+
+}  // namespace rs

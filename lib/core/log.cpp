@@ -1,0 +1,10 @@
+#include "core/log.h"
+
+namespace rs {
+
+Reporter& silentReporter() {
+    static Reporter silent;  // stateless
+    return silent;
+}
+
+}  // namespace rs

@@ -1,0 +1,26 @@
+// The photon tracer's quasi-Monte Carlo sequence (docs/design.md §7): Halton with random digit
+// permutations (one per dimension and digit, drawn from the seed), so that path n's numbers
+// are a pure function of (seed, n, dimension). Dimensions past the table fall back to hashed
+// random numbers.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace rs {
+
+class ScrambledHalton {
+public:
+    ScrambledHalton(uint64_t seed, int dimensions);
+    int dimensions() const { return int(bases_.size()); }
+    float sample(uint64_t index, int dim) const;
+
+private:
+    uint64_t seed_;
+    std::vector<int> bases_, digits_;
+    std::vector<size_t> offset_;      // into perms_, per dimension
+    std::vector<uint16_t> perms_;     // digits_[d] permutations of bases_[d] digits each
+};
+
+}  // namespace rs

@@ -1,0 +1,58 @@
+#include "core/stats.h"
+
+#include <cstdio>
+
+namespace rs {
+
+void Stats::addTime(const std::string& stage, double s) {
+    for (auto& [name, v] : seconds)
+        if (name == stage) { v += s; return; }
+    seconds.emplace_back(stage, s);
+}
+
+void Stats::setCount(const std::string& name, double value) {
+    for (auto& [n, v] : counts)
+        if (n == name) { v = value; return; }
+    counts.emplace_back(name, value);
+}
+
+double Stats::time(const std::string& stage) const {
+    for (const auto& [name, v] : seconds)
+        if (name == stage) return v;
+    return 0.0;
+}
+
+double Stats::totalSeconds() const {
+    double t = 0;
+    for (const auto& [name, v] : seconds) t += v;
+    return t;
+}
+
+static std::string jsonString(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') { out += '\\'; out += c; }
+        else if (static_cast<unsigned char>(c) < 0x20) { char b[8]; std::snprintf(b, sizeof b, "\\u%04x", c); out += b; }
+        else out += c;
+    }
+    return out + "\"";
+}
+
+static std::string jsonObject(const std::vector<std::pair<std::string, double>>& kv) {
+    std::string out = "{";
+    for (size_t i = 0; i < kv.size(); ++i) {
+        char b[64];
+        std::snprintf(b, sizeof b, "%.9g", kv[i].second);
+        out += (i ? ", " : "") + jsonString(kv[i].first) + ": " + b;
+    }
+    return out + "}";
+}
+
+std::string Stats::json() const {
+    char total[64];
+    std::snprintf(total, sizeof total, "%.9g", totalSeconds());
+    return "{\n  \"seconds\": " + jsonObject(seconds) + ",\n  \"total_seconds\": " + total +
+           ",\n  \"counts\": " + jsonObject(counts) + "\n}\n";
+}
+
+}  // namespace rs

@@ -1,0 +1,74 @@
+// Scene → OcclusionGrid (docs/design.md §5, paper §4). Two voxelizers computing the same six
+// occlusion counts per voxel by the same sub-sample rule:
+//  - the GPU voxelizer: headless EGL/OpenGL 4.5, for each axis intervals of at most 64
+//    slices rasterized with an orthographic camera at 4×4 supersampling, slice bits OR-ed
+//    into integer attachments, front and back facing apart, then a reduction to counts;
+//  - the CPU voxelizer: the reference for tests and the fallback (--voxelizer cpu).
+// Sub-sample rule (both): for axis a, the voxel face perpendicular to a is split into 4×4
+// sub-samples; sub-sample (u, v) of voxel column (i, j) is covered by a triangle when the
+// sub-sample's centre lies inside the triangle's projection along a (GL fill rules), and
+// the triangle's a-coordinate there falls in slice k → voxel (i, j, k), side + or − by the
+// sign of the triangle's geometric normal along a. The count is the number of covered
+// sub-samples (0…16).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/log.h"
+#include "grid/occlusion_grid.h"
+#include "core/parallel.h"
+#include "scene/scene.h"
+
+namespace rs {
+
+using IVec2 = glm::ivec2;
+
+enum class VoxelizerKind { Gpu, Cpu };
+
+struct VoxelizeTimings {
+    double setup = 0;  // EGL context and shader compilation, seconds
+    double upload = 0, raster = 0, readback = 0, reduction = 0;  // seconds; raster includes glFinish
+    int passes = 0;  // draws of all triangles (axis × interval × viewport tile)
+    double total() const { return setup + upload + raster + readback + reduction; }
+};
+
+OcclusionGrid voxelizeCpu(const Scene& scene, const GridGeometry& grid, ThreadPool& pool, Reporter& reporter);
+
+// Creates a headless EGL context on the calling thread (hardware device first, then Mesa's
+// llvmpipe); throws Error(Gpu) with a one-line reason when there is no usable EGL.
+OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& grid, Reporter& reporter,
+                          VoxelizeTimings* timings = nullptr);
+
+// -- Shared by both voxelizers (voxelize_cpu.cpp defines them) -------------------------
+
+// Vertices are snapped to multiples of 1/kSnapPerVoxel voxel: at 4 sub-samples a voxel that
+// is 1/256 of a pixel, the sub-pixel precision of GL rasterizers (Mesa's llvmpipe, NVIDIA,
+// AMD), so the GPU's own snapping changes nothing and the CPU's integer edge functions see
+// the same vertices. Sub-sample centres are at (p + 0.5)/4 voxel = multiples of 1/8 voxel.
+constexpr int kSnapPerVoxel = 1024;
+constexpr int kMaxSlicesPerPass = 64;  // bits of one RG (or BA) mask
+
+// Triangles in voxel space for the voxelizers. For axis a with in-plane axes
+// u = (a+1) mod 3, v = (a+2) mod 3, plane a of triangle t is planes[3t + a] =
+// (c0, cu, cv, sign): the triangle's a-coordinate over the projection plane is
+// c0 + cu·u + cv·v (evaluated as (c0 + cu·u) + cv·v in float, no fused multiply-add), and
+// sign is that of the geometric normal's a-component (+1, −1, or 0 where the triangle is
+// parallel to a and its projection has no area). slices[3t + a] = (floor of the lowest,
+// floor of the highest vertex coordinate along a): the plane's slice is clamped to it, so
+// float rounding on steep triangles never puts a hit outside the triangle's own extent, and
+// the GPU can skip a triangle in the intervals it does not reach.
+struct VoxelTriangles {
+    std::vector<Vec3> positions;    // 3 per triangle, voxel space, snapped
+    std::vector<Vec4> planes;       // 3 per triangle
+    std::vector<IVec2> slices;      // 3 per triangle
+    size_t count() const { return positions.size() / 3; }
+};
+VoxelTriangles prepareVoxelTriangles(const Scene& scene, const GridGeometry& grid);
+
+// Throws Error(Config) with a memory estimate when the grid's OcclusionGrid would exceed
+// kMaxGridBytes.
+constexpr double kMaxGridBytes = 16.0 * (1ull << 30);
+void checkGridSize(const GridGeometry& grid);
+
+}  // namespace rs

@@ -1,0 +1,39 @@
+// The reference path tracer (docs/design.md §8 "path"): the ground truth the tests and the quality
+// study compare against. Unidirectional, next-event estimation with MIS (power heuristic)
+// for area lights, punctual lights by NEE alone, Russian roulette, box pixel filter with
+// Owen-scrambled Sobol pixel positions. Each pixel sample's numbers are a function of
+// (seed, pixel, sample index): the image does not depend on the thread count.
+#pragma once
+
+#include "scene/accel.h"
+#include "config.h"
+#include "output/film.h"
+#include "scene/lights.h"
+#include "core/log.h"
+#include "core/parallel.h"
+
+namespace rs {
+
+struct PathPass {
+    int firstSample = 0;  // sample indices [firstSample, firstSample + spp) of every pixel
+    int spp = 1;
+};
+
+// Renders one pass; the film holds the average over the pass's samples. Layers split the
+// light by its last path segments as the photon classes do (docs/design.md §7): emission seen
+// directly (through specular chains), direct, caustic (light → specular+ → first diffuse
+// vertex), indirect.
+Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
+                    int width, int height, const RenderConfig& cfg, const PathPass& pass, ThreadPool& pool,
+                    Reporter& reporter);
+
+// Radiance along one camera ray, split into layers (for tests: analytic checks).
+struct PathRadiance {
+    Vec3 layer[kLayerCount] = {};
+    Vec3 albedo{0.f}, normal{0.f};
+    Vec3 total() const { return layer[0] + layer[1] + layer[2] + layer[3]; }
+};
+PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, Vec3 origin,
+                       Vec3 dir, int maxDepth, class Sampler& sampler);
+
+}  // namespace rs

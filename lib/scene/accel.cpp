@@ -1,0 +1,138 @@
+// Embree 3 wrapper: one device (given the render's thread count), one scene with one
+// triangle geometry holding every triangle of the Scene in its order (primID = triangle).
+#include "scene/accel.h"
+
+#include <embree3/rtcore.h>
+
+#include <mutex>
+#include <string>
+
+#include "core/error.h"
+
+namespace rs {
+
+struct RayAccel::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::mutex errorMutex;
+    std::string firstError;
+
+    ~Impl() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+    void throwIfError(const char* what) {
+        std::lock_guard<std::mutex> lock(errorMutex);
+        if (!firstError.empty()) throw Error(ErrorKind::Embree, std::string("embree: ") + what + ": " + firstError);
+    }
+};
+
+static void onEmbreeError(void* user, RTCError code, const char* message) {
+    auto* impl = static_cast<RayAccel::Impl*>(user);
+    std::lock_guard<std::mutex> lock(impl->errorMutex);
+    if (impl->firstError.empty())
+        impl->firstError = std::string(message ? message : "error") + " (code " + std::to_string(int(code)) + ")";
+}
+
+RayAccel::RayAccel(const Scene& scene, int threads) : impl_(std::make_unique<Impl>()), scene_(scene) {
+    std::string cfg = "threads=" + std::to_string(std::max(threads, 1)) + ",user_threads=0";
+    impl_->device = rtcNewDevice(cfg.c_str());
+    if (!impl_->device)
+        throw Error(ErrorKind::Embree, "embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    rtcSetDeviceErrorFunction(impl_->device, onEmbreeError, impl_.get());
+
+    impl_->scene = rtcNewScene(impl_->device);
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    size_t n = scene.triangleCount();
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), 3 * n));
+    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                               3 * sizeof(uint32_t), n));
+    impl_->throwIfError("allocating the vertex buffer");
+    for (size_t i = 0; i < 3 * n; ++i) {
+        v[3 * i] = scene.positions[i].x;
+        v[3 * i + 1] = scene.positions[i].y;
+        v[3 * i + 2] = scene.positions[i].z;
+        idx[i] = uint32_t(i);
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(impl_->scene, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(impl_->scene);
+    impl_->throwIfError("building the BVH");
+}
+
+RayAccel::~RayAccel() = default;
+
+bool RayAccel::intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint& hit, float& t) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
+    rh.ray.tnear = 0.f;
+    rh.ray.tfar = tmax;
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0.f;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    t = rh.ray.tfar;
+    uint32_t tri = rh.hit.primID;
+    float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.f - b1 - b2;
+    const Scene& s = scene_;
+    hit.tri = tri;
+    hit.material = s.triMaterial[tri];
+    hit.p = o + t * d;
+    hit.ng = s.geometricNormal(tri);
+    Vec3 ns = b0 * s.normals[3 * tri] + b1 * s.normals[3 * tri + 1] + b2 * s.normals[3 * tri + 2];
+    float len = glm::length(ns);
+    hit.ns = len > 1e-8f ? ns / len : hit.ng;
+    hit.uv = b0 * s.uvs[3 * tri] + b1 * s.uvs[3 * tri + 1] + b2 * s.uvs[3 * tri + 2];
+    hit.frontFace = glm::dot(d, hit.ng) < 0.f;
+    return true;
+}
+
+bool RayAccel::occluded(const Vec3& o, const Vec3& d, float tmax) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay ray;
+    ray.org_x = o.x; ray.org_y = o.y; ray.org_z = o.z;
+    ray.dir_x = d.x; ray.dir_y = d.y; ray.dir_z = d.z;
+    ray.tnear = 0.f;
+    ray.tfar = tmax;
+    ray.mask = 0xffffffffu;
+    ray.flags = 0;
+    ray.time = 0.f;
+    rtcOccluded1(impl_->scene, &ctx, &ray);
+    return ray.tfar < 0.f;
+}
+
+uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCRay16 rays;
+    int valid[kPacket];
+    for (int i = 0; i < kPacket; ++i) {
+        const bool live = i < count;
+        valid[i] = live ? -1 : 0;
+        const Vec3 o = live ? from[i] : to, d = to - o;
+        rays.org_x[i] = o.x, rays.org_y[i] = o.y, rays.org_z[i] = o.z;
+        rays.dir_x[i] = d.x, rays.dir_y[i] = d.y, rays.dir_z[i] = d.z;
+        rays.tnear[i] = 0.f, rays.tfar[i] = 1.f, rays.time[i] = 0.f;
+        rays.mask[i] = 0xffffffffu, rays.id[i] = uint32_t(i), rays.flags[i] = 0;
+    }
+    rtcOccluded16(valid, impl_->scene, &ctx, &rays);
+    uint32_t hidden = 0;
+    for (int i = 0; i < count; ++i)
+        if (rays.tfar[i] < 0.f) hidden |= 1u << i;
+    return hidden;
+}
+
+}  // namespace rs

@@ -1,0 +1,56 @@
+// RayAccel: one Embree BVH over the scene's triangles, behind RAII. Embree errors become
+// Error(Embree). Rays are in world space; hits come back as SurfacePoints.
+#pragma once
+
+#include <memory>
+
+#include "scene/scene.h"
+
+namespace rs {
+
+struct SurfacePoint {
+    Vec3 p;          // world position
+    Vec3 ng;         // geometric normal of the winding (front side), unit
+    Vec3 ns;         // interpolated shading normal, unit
+    Vec2 uv;
+    uint32_t tri = 0;
+    uint32_t material = 0;
+    bool frontFace = true;  // the ray came from the side ng points to
+};
+
+class RayAccel {
+public:
+    RayAccel(const Scene& scene, int threads);
+    ~RayAccel();
+    RayAccel(const RayAccel&) = delete;
+    RayAccel& operator=(const RayAccel&) = delete;
+
+    // Closest hit along o + t·d, t in (0, tmax); d need not be unit.
+    bool intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint& hit, float& t) const;
+    // Anything in (0, tmax)?
+    bool occluded(const Vec3& o, const Vec3& d, float tmax) const;
+    // Up to kPacket segments from[i] → to at once (one Embree packet, the rays marked coherent:
+    // they share an end). Bit i of the result: something lies strictly between from[i] and to.
+    static constexpr int kPacket = 16;
+    uint32_t occludedToPoint(const Vec3* from, int count, const Vec3& to) const;
+    const Scene& scene() const { return scene_; }
+
+    struct Impl;  // Embree handles
+
+private:
+    std::unique_ptr<Impl> impl_;
+    const Scene& scene_;
+};
+
+// How far a point at p is nudged off its surface before a ray leaves it.
+inline float rayOriginOffset(const Vec3& p) {
+    return 1e-4f * (1.f + std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+}
+
+// A ray origin nudged off the surface to the side `w` leaves by.
+inline Vec3 offsetRayOrigin(const SurfacePoint& sp, const Vec3& w) {
+    float eps = rayOriginOffset(sp.p);
+    return sp.p + (glm::dot(w, sp.ng) > 0.f ? eps : -eps) * sp.ng;
+}
+
+}  // namespace rs

@@ -1,0 +1,178 @@
+// BSDFs of docs/design.md §3. The GGX lobe uses the Smith height-uncorrelated masking term and
+// visible-normal sampling (Heitz 2018); Fresnel is Schlick's for conductors and the mix, exact
+// for glass. Opaque materials are two-sided: the frame is turned to the side wo is on.
+#include "scene/bsdf.h"
+
+#include "core/sampling.h"
+
+namespace rs {
+
+namespace {
+
+float schlickWeight(float cosTheta) {
+    float m = std::clamp(1.f - cosTheta, 0.f, 1.f);
+    return (m * m) * (m * m) * m;
+}
+
+Vec3 schlick(const Vec3& f0, float cosTheta) { return f0 + (Vec3(1.f) - f0) * schlickWeight(cosTheta); }
+
+float ggxD(float cosH, float alpha) {
+    float a2 = alpha * alpha;
+    float c2 = cosH * cosH;
+    float d = c2 * (a2 - 1.f) + 1.f;
+    return a2 / (kPi * d * d);
+}
+
+float ggxD(const Vec3& h, float alpha) { return ggxD(h.z, alpha); }
+
+float ggxLambda(float cosTheta, float alpha) {
+    float c2 = cosTheta * cosTheta;
+    if (c2 >= 1.f) return 0.f;
+    float tan2 = (1.f - c2) / std::max(c2, 1e-12f);
+    return 0.5f * (std::sqrt(1.f + alpha * alpha * tan2) - 1.f);
+}
+float ggxLambda(const Vec3& w, float alpha) { return ggxLambda(w.z, alpha); }
+
+float ggxG1(const Vec3& w, float alpha) { return 1.f / (1.f + ggxLambda(w, alpha)); }
+
+Vec3 sampleGgxVisibleNormal(const Vec3& wo, float alpha, Vec2 u) {
+    Vec3 vh = glm::normalize(Vec3(alpha * wo.x, alpha * wo.y, wo.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    Vec3 t1 = lensq > 0.f ? Vec3(-vh.y, vh.x, 0.f) / std::sqrt(lensq) : Vec3(1.f, 0.f, 0.f);
+    Vec3 t2 = glm::cross(vh, t1);
+    float r = std::sqrt(u.x), phi = 2.f * kPi * u.y;
+    float p1 = r * std::cos(phi), p2 = r * std::sin(phi);
+    float s = 0.5f * (1.f + vh.z);
+    p2 = (1.f - s) * std::sqrt(std::max(0.f, 1.f - p1 * p1)) + s * p2;
+    Vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.f, 1.f - p1 * p1 - p2 * p2)) * vh;
+    return glm::normalize(Vec3(alpha * nh.x, alpha * nh.y, std::max(1e-6f, nh.z)));
+}
+
+Vec3 reflect(const Vec3& w, const Vec3& n) { return 2.f * glm::dot(w, n) * n - w; }
+
+}  // namespace
+
+GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha) {
+    float g = 1.f / (1.f + ggxLambda(cosO, alpha) + ggxLambda(cosI, alpha));
+    return {ggxD(cosH, alpha) * g / (4.f * cosO * cosI), schlickWeight(cosOH)};
+}
+
+float fresnelDielectric(float cosThetaI, float eta) {
+    float sin2T = (1.f - cosThetaI * cosThetaI) / (eta * eta);
+    if (sin2T >= 1.f) return 1.f;
+    float cosT = std::sqrt(1.f - sin2T);
+    float rs = (cosThetaI - eta * cosT) / (cosThetaI + eta * cosT);
+    float rp = (eta * cosThetaI - cosT) / (eta * cosThetaI + cosT);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
+    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.uv)) {
+    const Material& m = *material_;
+    bool outside = glm::dot(wo, sp.ng) >= 0.f;
+    ng_ = outside ? sp.ng : -sp.ng;
+    Vec3 ns = outside ? sp.ns : -sp.ns;
+    // A shading normal that puts wo below the surface would make light leak: use ng there.
+    if (glm::dot(ns, wo) <= 1e-4f || glm::dot(ns, ng_) <= 0.f) ns = ng_;
+    frame_ = Frame(ns);
+    eta_ = outside ? m.ior : 1.f / m.ior;
+    alpha_ = std::max(m.alpha(), 0.0025f);
+    switch (m.kind) {
+        case MaterialKind::Lambert: diffuseWeight_ = 1.f; break;
+        case MaterialKind::Glossy: hasGgx_ = true; f0_ = albedo_; break;
+        case MaterialKind::Mix:
+            hasGgx_ = true;
+            diffuseWeight_ = 1.f - m.metallic;
+            f0_ = glm::mix(Vec3(0.04f), albedo_, m.metallic);
+            break;
+        case MaterialKind::Mirror: f0_ = albedo_; break;
+        case MaterialKind::Glass: break;
+    }
+}
+
+float Bsdf::specularProbability(const Vec3& woLocal) const {
+    if (!hasGgx_) return 0.f;
+    if (diffuseWeight_ <= 0.f) return 1.f;
+    float s = luminance(schlick(f0_, woLocal.z));
+    float d = diffuseWeight_ * luminance(albedo_);
+    return std::clamp(s / std::max(s + d, 1e-6f), 0.05f, 0.95f);
+}
+
+Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
+    if (isDelta()) return Vec3(0.f);
+    if (glm::dot(wiW, ng_) <= 0.f) return Vec3(0.f);  // opaque: no light from behind
+    Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
+    if (wo.z <= 0.f || wi.z <= 0.f) return Vec3(0.f);
+    Vec3 f = diffuseWeight_ * albedo_ * kInvPi;
+    if (hasGgx_) {
+        Vec3 h = glm::normalize(wo + wi);
+        GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);
+        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
+    }
+    return f;
+}
+
+float Bsdf::pdf(const Vec3& woW, const Vec3& wiW) const {
+    if (isDelta()) return 0.f;
+    if (glm::dot(wiW, ng_) <= 0.f) return 0.f;
+    Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
+    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    float ps = specularProbability(wo);
+    float p = (1.f - ps) * wi.z * kInvPi;
+    if (ps > 0.f) {
+        Vec3 h = glm::normalize(wo + wi);
+        p += ps * ggxG1(wo, alpha_) * ggxD(h, alpha_) / (4.f * wo.z);
+    }
+    return p;
+}
+
+BsdfSample Bsdf::sample(const Vec3& woW, float uLobe, Vec2 u, Transport mode) const {
+    BsdfSample s;
+    Vec3 wo = frame_.toLocal(woW);
+    const Material& m = *material_;
+
+    if (m.kind == MaterialKind::Mirror) {
+        s.wi = reflect(woW, frame_.n);
+        s.weight = schlick(f0_, std::max(wo.z, 0.f));
+        s.pdf = 1.f;
+        s.delta = true;
+        if (glm::dot(s.wi, ng_) <= 0.f) s.pdf = 0.f;
+        return s;
+    }
+    if (m.kind == MaterialKind::Glass) {
+        // Fresnel picks reflection or refraction; the chosen branch carries weight 1 (or the
+        // transmission tint), so the estimator is unbiased for the sum of both.
+        float cosI = std::max(wo.z, 0.f);
+        float f = fresnelDielectric(cosI, eta_);
+        s.delta = true;
+        s.pdf = 1.f;
+        if (uLobe < f) {
+            s.wi = reflect(woW, frame_.n);
+            s.weight = Vec3(1.f);
+        } else {
+            float sin2T = (1.f - cosI * cosI) / (eta_ * eta_);
+            float cosT = std::sqrt(std::max(0.f, 1.f - sin2T));
+            s.wi = glm::normalize(-woW / eta_ + (cosI / eta_ - cosT) * frame_.n);
+            s.weight = albedo_ * (mode == Transport::Radiance ? 1.f / (eta_ * eta_) : 1.f);
+        }
+        return s;
+    }
+    if (wo.z <= 0.f) return s;
+
+    Vec3 wi;
+    if (uLobe < specularProbability(wo)) {
+        Vec3 h = sampleGgxVisibleNormal(wo, alpha_, u);
+        wi = reflect(wo, h);
+        if (wi.z <= 0.f) return s;
+    } else {
+        wi = sampleCosineHemisphere(u);
+        if (wi.z <= 0.f) return s;
+    }
+    s.wi = frame_.toWorld(wi);
+    s.pdf = pdf(woW, s.wi);
+    if (s.pdf <= 0.f) return s;
+    s.weight = eval(woW, s.wi) * (std::abs(glm::dot(s.wi, frame_.n)) / s.pdf);
+    return s;
+}
+
+}  // namespace rs

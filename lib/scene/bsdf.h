@@ -1,0 +1,66 @@
+// Scattering at a surface point for every material kind of docs/design.md §3: Lambert, GGX
+// conductor, the Lambert+GGX mix, smooth glass and the perfect mirror. Directions are
+// world-space unit vectors pointing away from the surface (wo to the viewer or the previous
+// vertex, wi to the light or the next vertex). Values are f(wo, wi) without the cosine.
+#pragma once
+
+#include "scene/accel.h"
+#include "core/math.h"
+
+namespace rs {
+
+// Radiance: camera paths (refraction scales radiance by 1/η²); Importance: photon paths,
+// which carry flux and do not scale.
+enum class Transport { Radiance, Importance };
+
+struct BsdfSample {
+    Vec3 wi{0.f};
+    Vec3 weight{0.f};  // f·|cos θi| / pdf  (the Fresnel-chosen branch weight for delta lobes)
+    float pdf = 0.f;   // solid angle; 0 when the sample failed
+    bool delta = false;
+};
+
+class Bsdf {
+public:
+    // wo: unit direction away from the surface towards the previous vertex.
+    Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo);
+
+    bool isDelta() const { return material_->isSpecular(); }
+    Vec3 eval(const Vec3& wo, const Vec3& wi) const;  // 0 for delta materials
+    float pdf(const Vec3& wo, const Vec3& wi) const;  // 0 for delta materials
+    // u: one number picks the lobe (or the Fresnel branch), two more the direction.
+    BsdfSample sample(const Vec3& wo, float uLobe, Vec2 u, Transport mode) const;
+    Vec3 albedo() const { return albedo_; }
+    // The parts eval() is made of, for eye samples that store them (eye.h's GlossyLobe).
+    Vec3 diffuseReflectance() const { return diffuseWeight_ * albedo_ * kInvPi; }  // the diffuse lobe's f
+    bool hasGlossyLobe() const { return hasGgx_; }
+    Vec3 fresnelAtNormal() const { return f0_; }
+    float ggxAlpha() const { return alpha_; }
+    const Vec3& shadingNormal() const { return frame_.n; }
+
+private:
+    float specularProbability(const Vec3& woLocal) const;
+
+    const Material* material_;
+    Frame frame_;      // around the shading normal, flipped to wo's side for opaque materials
+    Vec3 ng_;          // geometric normal, same side as frame_.n for opaque materials
+    Vec3 albedo_;      // base colour at the point
+    Vec3 f0_;          // Fresnel at normal incidence of the GGX / mirror lobe
+    float diffuseWeight_ = 0.f;  // (1 − metallic) for Lambert and mix
+    bool hasGgx_ = false;
+    float alpha_ = 1.f;
+    float eta_ = 1.f;  // glass: ηt/ηi for light leaving towards the side opposite wo
+};
+
+// The GGX lobe of eval(): with cosines to the shading normal of wo, wi (both > 0) and of the
+// half vector h, and wo·h, f = schlick(f0, wo·h) · dg, schlick(f0, c) = f0 + (1 − f0)·m5.
+struct GgxReflection {
+    float dg = 0.f;  // D(h)·G(wo, wi) / (4 cosθo cosθi)
+    float m5 = 0.f;  // (1 − wo·h)^5
+};
+GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha);
+
+// Exact dielectric Fresnel reflectance for cosθi (≥ 0) and relative IOR eta = ηt/ηi.
+float fresnelDielectric(float cosThetaI, float eta);
+
+}  // namespace rs

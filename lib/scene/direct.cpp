@@ -1,0 +1,54 @@
+#include "scene/direct.h"
+
+#include "core/sampling.h"
+
+namespace rs {
+
+Vec3 sampleLightDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
+                       const Vec3& wo, float uChoice, Vec2 u) {
+    LightSample ls = lights.sampleLi(sp.p, uChoice, u);
+    if (!(ls.pdf > 0.f) || isBlack(ls.radiance)) return Vec3(0.f);
+    Vec3 f = bsdf.eval(wo, ls.wi);
+    float cosI = std::abs(glm::dot(ls.wi, bsdf.shadingNormal()));
+    if (isBlack(f) || !(cosI > 0.f)) return Vec3(0.f);
+    // Aim from the offset origin at the light point itself: along ls.wi, the offset would
+    // carry the ray through the light's plane before tmax when the surface faces the light
+    // at low elevation, and the light would shadow itself.
+    Vec3 origin = offsetRayOrigin(sp, ls.wi);
+    bool visible = std::isfinite(ls.dist) ? !accel.occluded(origin, sp.p + ls.wi * ls.dist - origin, 1.f - 1e-4f)
+                                          : !accel.occluded(origin, ls.wi, kInf);
+    if (!visible) return Vec3(0.f);
+    float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, bsdf.pdf(wo, ls.wi));
+    return f * ls.radiance * (cosI * w / ls.pdf);
+}
+
+float emitterHitWeight(const LightSampler& lights, float bsdfPdf, const Vec3& from, const SurfacePoint& hit) {
+    return powerHeuristic(bsdfPdf, lights.pdfLi(from, hit.tri, hit.p));
+}
+
+Vec3 estimateDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
+                    const Vec3& wo, int n, uint64_t scramble, Sampler& sampler) {
+    const Scene& scene = accel.scene();
+    Vec3 sum(0.f);
+    const float jitter = sampler.get1D();
+    for (int k = 0; k < n; ++k) {
+        // Light sampling: stratified in the light choice and over the light's surface.
+        Vec2 u = sobol2D(uint32_t(k), scramble);
+        float uChoice = (float(k) + jitter) / float(n);
+        sum += sampleLightDirect(accel, lights, sp, bsdf, wo, std::min(uChoice, 0x1.fffffep-1f), u);
+
+        // BSDF sampling: emitted light met first by the sampled ray.
+        float uLobe = sampler.get1D();
+        BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
+        if (!(bs.pdf > 0.f) || isBlack(bs.weight) || bs.delta) continue;
+        SurfacePoint hit;
+        float t;
+        if (!accel.intersect(offsetRayOrigin(sp, bs.wi), bs.wi, kInf, hit, t)) continue;
+        const Material& m = scene.materials[hit.material];
+        if (!m.isEmissive() || !hit.frontFace) continue;
+        sum += bs.weight * m.emission * emitterHitWeight(lights, bs.pdf, sp.p, hit);
+    }
+    return sum / float(n);
+}
+
+}  // namespace rs

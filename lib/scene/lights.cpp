@@ -1,0 +1,154 @@
+// Lights chosen in proportion to their luminance power: emissive triangles (Le·π·A, emitting
+// from the front face only) and KHR_lights_punctual lights (4π·I for points, the cone integral
+// for spots, E·π·r² over the scene's bounding disc for directional lights).
+#include "scene/lights.h"
+
+#include "core/sampling.h"
+
+namespace rs {
+
+LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
+    sceneCenter_ = scene.bounds.center();
+    sceneRadius_ = std::max(0.5f * scene.bounds.diagonal(), 1e-4f);
+    entryOfTriangle_.assign(scene.triangleCount(), -1);
+    for (size_t t = 0; t < scene.triangleCount(); ++t) {
+        const Material& m = scene.materials[scene.triMaterial[t]];
+        if (!m.isEmissive()) continue;
+        float power = luminance(m.emission) * kPi * scene.triangleArea(t);
+        if (!(power > 0.f)) continue;
+        entryOfTriangle_[t] = int32_t(entries_.size());
+        entries_.push_back({true, uint32_t(t), power});
+    }
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const PunctualLight& l = scene.lights[i];
+        float I = luminance(l.intensity), power = 0.f;
+        switch (l.type) {
+            case LightType::Point: power = 4.f * kPi * I; break;
+            case LightType::Spot: power = 2.f * kPi * I * ((1.f - l.cosInner) + (l.cosInner - l.cosOuter) / 3.f); break;
+            case LightType::Directional: power = kPi * sqr(sceneRadius_) * I; break;
+        }
+        if (power > 0.f) entries_.push_back({false, uint32_t(i), power});
+    }
+    double total = 0.0;
+    for (const Entry& e : entries_) total += e.power;
+    double acc = 0.0;
+    for (const Entry& e : entries_) {
+        acc += e.power;
+        cdf_.push_back(float(acc / total));
+    }
+    if (!cdf_.empty()) cdf_.back() = 1.f;
+}
+
+size_t LightSampler::choose(float u, float& prob) const {
+    size_t i = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    i = std::min(i, cdf_.size() - 1);
+    prob = cdf_[i] - (i ? cdf_[i - 1] : 0.f);
+    return i;
+}
+
+LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
+    LightSample s;
+    if (empty()) return s;
+    float prob;
+    const Entry& e = entries_[choose(uChoice, prob)];
+    if (!(prob > 0.f)) return s;
+    if (e.area) {
+        const Vec3* v = &scene_.positions[3 * e.index];
+        Vec2 b = sampleUniformTriangle(u);
+        Vec3 pl = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        Vec3 d = pl - p;
+        float dist2 = glm::dot(d, d);
+        if (!(dist2 > 0.f)) return s;
+        s.dist = std::sqrt(dist2);
+        s.wi = d / s.dist;
+        float cosL = -glm::dot(s.wi, scene_.geometricNormal(e.index));
+        if (cosL <= 0.f) return s;  // the back of an emitter is dark
+        s.radiance = scene_.materials[scene_.triMaterial[e.index]].emission;
+        s.pdf = prob * dist2 / (cosL * scene_.triangleArea(e.index));
+        return s;
+    }
+    const PunctualLight& l = scene_.lights[e.index];
+    s.delta = true;
+    s.pdf = prob;
+    if (l.type == LightType::Directional) {
+        s.wi = -l.direction;
+        s.dist = kInf;
+        s.radiance = l.intensity;  // irradiance, W/m², on a surface facing the light
+        return s;
+    }
+    Vec3 d = l.position - p;
+    float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.f)) return s;
+    s.dist = std::sqrt(dist2);
+    s.wi = d / s.dist;
+    s.radiance = l.intensityTowards(-s.wi) / dist2;  // irradiance at normal incidence
+    return s;
+}
+
+float LightSampler::pdfLi(const Vec3& p, uint32_t tri, const Vec3& pl) const {
+    int32_t e = entryOfTriangle_[tri];
+    if (e < 0) return 0.f;
+    float prob = cdf_[e] - (e ? cdf_[e - 1] : 0.f);
+    Vec3 d = pl - p;
+    float dist2 = glm::dot(d, d);
+    float cosL = std::abs(glm::dot(d, scene_.geometricNormal(tri))) / std::sqrt(dist2);
+    if (cosL <= 0.f) return 0.f;
+    return prob * dist2 / (cosL * scene_.triangleArea(tri));
+}
+
+EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const {
+    EmissionSample s;
+    if (empty()) return s;
+    float prob;
+    size_t ei = choose(uChoice, prob);
+    const Entry& e = entries_[ei];
+    s.choiceProb = prob;
+    if (!(prob > 0.f)) return s;
+    if (e.area) {
+        // Uniform point on the triangle, cosine-weighted direction around its front normal.
+        const Vec3* v = &scene_.positions[3 * e.index];
+        Vec2 b = sampleUniformTriangle(uPos);
+        Vec3 n = scene_.geometricNormal(e.index);
+        s.origin = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        s.normal = n;
+        Vec3 local = sampleCosineHemisphere(uDir);
+        s.dir = Frame(n).toWorld(local);
+        float area = scene_.triangleArea(e.index);
+        s.pdfDir = local.z * kInvPi;
+        s.pdfChoicePos = prob / area;
+        // Le·cos / (pChoice · 1/A · cos/π) = Le·π·A / pChoice
+        s.flux = scene_.materials[scene_.triMaterial[e.index]].emission * (kPi * area / prob);
+        return s;
+    }
+    const PunctualLight& l = scene_.lights[e.index];
+    s.pdfChoicePos = prob;
+    switch (l.type) {
+        case LightType::Point:
+        case LightType::Spot: {
+            s.origin = l.position;
+            if (l.type == LightType::Point) {
+                s.dir = sampleUniformSphere(uDir);
+                s.pdfDir = 1.f / (4.f * kPi);
+            } else {
+                s.dir = Frame(l.direction).toWorld(sampleUniformCone(uDir, l.cosOuter));
+                s.pdfDir = 1.f / (2.f * kPi * (1.f - l.cosOuter));
+            }
+            s.flux = l.intensityTowards(s.dir) / (s.pdfDir * prob);
+            break;
+        }
+        case LightType::Directional: {
+            // A disc of the scene's bounding radius, perpendicular to the light, outside the scene.
+            Frame f(l.direction);
+            Vec2 d = sampleUniformDisk(uPos) * sceneRadius_;
+            s.origin = sceneCenter_ - sceneRadius_ * l.direction + d.x * f.s + d.y * f.t;
+            s.dir = l.direction;
+            s.collimated = true;
+            s.pdfChoicePos = prob / (kPi * sqr(sceneRadius_));
+            s.flux = l.intensity * (kPi * sqr(sceneRadius_) / prob);
+            break;
+        }
+    }
+    return s;
+}
+
+}  // namespace rs

@@ -1,0 +1,96 @@
+// Scene: the glTF file flattened into world-space triangles, materials, lights and a camera
+// (docs/design.md §3). World space is glTF's: metres, right-handed, +Y up. Colours are linear RGB,
+// emission is radiance in W/(m²·sr), punctual intensities in W/sr, directional in W/m².
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+
+namespace rs {
+
+enum class MaterialKind { Lambert, Glossy, Mix, Glass, Mirror };
+const char* materialKindName(MaterialKind kind);
+
+struct Material {
+    std::string name;
+    MaterialKind kind = MaterialKind::Lambert;
+    Vec3 baseColor{0.8f};
+    float metallic = 0.f;
+    float roughness = 1.f;
+    float ior = 1.5f;
+    int baseColorTexture = -1;  // index into Scene::textures, or -1
+    Vec3 emission{0.f};         // radiance of the front face, W/(m²·sr)
+
+    bool isEmissive() const { return !isBlack(emission); }
+    bool isSpecular() const { return kind == MaterialKind::Glass || kind == MaterialKind::Mirror; }
+    float alpha() const { return std::max(roughness * roughness, 1e-3f); }  // GGX α
+};
+
+struct Texture {
+    std::string name;
+    int width = 0, height = 0;
+    std::vector<Vec3> texels;  // linear RGB (sRGB decoded), row 0 at v = 0
+
+    Vec3 sample(Vec2 uv) const;  // bilinear, repeat
+};
+
+enum class LightType { Point, Spot, Directional };
+
+struct PunctualLight {
+    std::string name;
+    LightType type = LightType::Point;
+    Vec3 position{0.f};
+    Vec3 direction{0, 0, -1};  // where it shines (spot, directional), unit
+    Vec3 intensity{1.f};       // colour × intensity: W/sr (point, spot) or W/m² (directional)
+    float cosInner = 1.f, cosOuter = 0.f;  // spot cone
+
+    // Intensity towards direction `w` (unit, away from the light); glTF's smooth cone falloff.
+    Vec3 intensityTowards(const Vec3& w) const;
+};
+
+struct Camera {
+    std::string name = "default";
+    Vec3 position{0.f};
+    Vec3 right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, -1};  // unit, world space
+    float yfov = 0.7f;       // radians
+    float aspect = 0.f;      // width / height from the file, 0 when not given
+};
+
+struct Scene {
+    std::string path;  // the file it came from, for messages
+
+    // Triangle soup in world space: triangle t has vertices 3t, 3t+1, 3t+2.
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;  // shading normals, unit (geometric normal where the file had none)
+    std::vector<Vec2> uvs;      // (0,0) where the file had none
+    std::vector<uint32_t> triMaterial;
+    std::vector<uint32_t> triObject;  // index into objectNames: "mesh 'name' (node 'name')"
+    std::vector<std::string> objectNames;
+
+    std::vector<Material> materials;
+    std::vector<Texture> textures;
+    std::vector<PunctualLight> lights;
+    std::vector<Camera> cameras;  // every perspective camera of the file, in node order
+    Bounds3 bounds;
+
+    size_t triangleCount() const { return triMaterial.size(); }
+    Vec3 geometricNormal(size_t tri) const;  // unit, from the counter-clockwise winding
+    float triangleArea(size_t tri) const;
+    // Base colour at a surface point: factor × texture.
+    Vec3 albedo(uint32_t material, Vec2 uv) const;
+    // The camera to render: the named one, or the first, or one framing the bounds.
+    Camera camera(const std::string& name = "") const;
+    // Total flux emitted by area and punctual lights, W (directional lights count over the
+    // scene's bounding-sphere disc).
+    Vec3 emittedPower() const;
+
+    void computeBounds();
+};
+
+// Loads a .gltf or .glb file. Throws Error(Scene/Io) naming the file and glTF object.
+Scene loadScene(const std::string& path, class Reporter& reporter);
+
+}  // namespace rs

@@ -1,0 +1,365 @@
+// The steps of CylinderTraversal (kdtree_traverse.h states the rules they implement).
+#include "splat/kdtree_traverse.h"
+
+namespace rs {
+
+using namespace kd_detail;
+
+// -- Mask set-up (§5.1) -----------------------------------------------------------------------
+
+CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl,
+                                     TraversalScratch& s)
+    : tree_(tree), eye_(eye), g_(tree.geometry), s_(s), o_(cyl.origin), w_(cyl.dir), n_(cyl.originNormal),
+      L_(cyl.length), radius_(cyl.radius), invVoxel_(1.f / tree.geometry.voxelSize) {
+    st_.cylinders = 1;
+    N_ = majorAxis(w_), U_ = (N_ + 1) % 3, V_ = (N_ + 2) % 3;
+    hOcc_ = radius_ + kOccluderMargin;
+    kernel2_ = radius_ * radius_;
+    valid2_ = sqr(radius_ + kValidCellMargin);
+    for (int b = 0; b < 3; ++b) r_[b] = hOcc_ * std::sqrt(std::max(0.f, 1.f - w_[b] * w_[b]));
+    kU_ = w_[U_] / w_[N_], kV_ = w_[V_] / w_[N_];
+    forward_ = w_[N_] >= 0.f;
+    dimN_ = g_.dims[N_];
+    // Occluders: the back-facing sides along ω, projected onto the N plane; ambiguous voxels
+    // pushed one voxel along their dominant axis D, that many N slices (§5.3).
+    for (int a = 0; a < 3; ++a) {
+        occWeight_[a] = std::abs(w_[a]) / (float(kSubsamples) * std::abs(w_[N_]));
+        side_[a] = w_[a] >= 0.f ? 2 * a : 2 * a + 1;
+        const float wa = std::abs(w_[a]);
+        ambOffset_[a] = wa * kMaxAmbiguousOffset <= std::abs(w_[N_])
+                            ? kMaxAmbiguousOffset
+                            : std::min(kMaxAmbiguousOffset, std::max(1, int(std::ceil(std::abs(w_[N_]) / wa))));
+    }
+    hasNormal_ = n_.x != 0.f || n_.y != 0.f || n_.z != 0.f;
+    tangentOffset_ = 0.5f * (std::abs(n_.x) + std::abs(n_.y) + std::abs(n_.z));
+
+    // The mask covers every point of every met voxel (|u| ≤ r_U + 1 + (r_N + 1)|k_U|) plus the
+    // bilinear neighbours.
+    halfU_ = int(std::ceil(r_[U_] + 1.f + (r_[N_] + 1.f) * std::abs(kU_))) + 2;
+    halfV_ = int(std::ceil(r_[V_] + 1.f + (r_[N_] + 1.f) * std::abs(kV_))) + 2;
+    sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
+    const size_t cells = size_t(sizeU_) * size_t(sizeV_);
+    if (s_.fill.size() < cells) s_.fill.resize(cells), s_.sweep.resize(cells);
+    findValidRows();
+    if (++s_.stamp == 0) {
+        for (FillCell& c : s_.fill) c.stamp = 0;
+        s_.stamp = 1;
+    }
+    stamp_ = s_.stamp;
+    s_.occluders.clear();
+    s_.samples.clear();
+}
+
+// Cell (i, j), relative to the mask centre: its centre within h + margin of the axis line.
+bool CylinderTraversal::validCell(int i, int j) const {
+    Vec3 q(0.f);
+    q[U_] = float(i) + 0.5f;
+    q[V_] = float(j) + 0.5f;
+    const float along = glm::dot(q, w_);
+    return glm::dot(q, q) - along * along <= valid2_;
+}
+
+// The valid cells of each mask row j: [rowLo[j], rowHi[j]] (mask indices, may reach past the
+// mask; empty when rowLo > rowHi). Per row the cells' distance² to the axis is a convex
+// quadratic in i (second difference 2(1 − ω_U²) ≥ 1, far above rounding), so the valid cells
+// are contiguous; the bounds are estimated analytically, then settled with validCell itself so
+// that they agree with it exactly.
+void CylinderTraversal::findValidRows() {
+    if (s_.rowLo.size() < size_t(sizeV_)) s_.rowLo.resize(size_t(sizeV_)), s_.rowHi.resize(size_t(sizeV_));
+    const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_], qc = 1.f - w_[V_] * w_[V_];
+    for (int j = 0; j < sizeV_; ++j) {
+        const int jj = j - halfV_;
+        const float y = float(jj) + 0.5f;
+        // Q(x) = qa x² − 2 qb x y + qc y², x = i + ½ (relative to the mask centre).
+        const float xc = qb * y / qa;
+        int ic = int(std::floor(xc));  // x = ic + ½ is the cell centre nearest the minimum
+        if (!validCell(ic, jj)) {
+            if (validCell(ic - 1, jj)) --ic;
+            else if (validCell(ic + 1, jj)) ++ic;
+            else {
+                s_.rowLo[size_t(j)] = INT_MAX / 2, s_.rowHi[size_t(j)] = INT_MIN / 2;
+                continue;
+            }
+        }
+        const float disc = std::max(0.f, qb * qb * y * y - qa * (qc * y * y - valid2_));
+        const float half = std::sqrt(disc) / qa;
+        int lo = std::min(ic, int(std::floor(xc - half - 0.5f)) + 1);
+        int hi = std::max(ic, int(std::floor(xc + half - 0.5f)));
+        while (lo < ic && !validCell(lo, jj)) ++lo;
+        while (validCell(lo - 1, jj)) --lo;
+        while (hi > ic && !validCell(hi, jj)) --hi;
+        while (validCell(hi + 1, jj)) ++hi;
+        s_.rowLo[size_t(j)] = lo + halfU_, s_.rowHi[size_t(j)] = hi + halfU_;
+    }
+}
+
+// -- Gathering occluders and samples (§5.1–5.3) ----------------------------------------------
+
+// From the root, the part of [0, L] whose disc boxes touch the grid, near child first.
+void CylinderTraversal::gather() {
+    StackEntry root{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
+    for (int a = 0; a < 3; ++a) {
+        clipLowerFace(o_[a], w_[a], r_[a], 0.f, root.t0, root.t1);
+        clipUpperFace(o_[a], w_[a], r_[a], float(g_.dims[a]), root.t0, root.t1);
+    }
+    s_.stack.clear();
+    if (root.t0 <= root.t1) s_.stack.push_back(root);
+    while (!s_.stack.empty()) {
+        const StackEntry e = s_.stack.back();
+        s_.stack.pop_back();
+        ++st_.nodes;
+        if (fullCount_ > 0 && prunable(e)) {
+            ++st_.pruned;
+            continue;
+        }
+        const Node node = tree_.nodes[e.node];
+        switch (node.type()) {
+            case NodeType::Empty: break;
+            case NodeType::Split: descend(e, node); break;
+            case NodeType::Brick: gatherBrick(e, tree_.bricks[node.brick()]); break;
+            case NodeType::Occlusion: gatherOcclusionBlock(e, node); break;
+        }
+    }
+}
+
+// Shrink the cylinder bounds to each child; the near child goes on top of the stack.
+void CylinderTraversal::descend(const StackEntry& e, Node node) {
+    const int a = node.axis();
+    const float plane = float(node.plane());
+    StackEntry lower = e, upper = e;
+    lower.node = e.node + 1;
+    lower.hi[a] = uint16_t(node.plane());
+    clipUpperFace(o_[a], w_[a], r_[a], plane, lower.t0, lower.t1);
+    upper.node = node.upperChild();
+    upper.lo[a] = uint16_t(node.plane());
+    clipLowerFace(o_[a], w_[a], r_[a], plane, upper.t0, upper.t1);
+    const StackEntry& nearChild = w_[a] >= 0.f ? lower : upper;
+    const StackEntry& farChild = w_[a] >= 0.f ? upper : lower;
+    if (farChild.t0 <= farChild.t1) s_.stack.push_back(farChild);
+    if (nearChild.t0 <= nearChild.t1) s_.stack.push_back(nearChild);
+}
+
+// The bits of a brick (whose min corner is e.lo) inside voxel ranges [i0, i1).
+static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i1[3]) {
+    auto axisBits = [](int from, int to) { return to <= from ? 0u : ((1u << to) - 1u) & ~((1u << from) - 1u); };
+    uint64_t mask = 0;
+    const unsigned xs = axisBits(i0[0] - e.lo[0], i1[0] - e.lo[0]);
+    const unsigned ys = axisBits(i0[1] - e.lo[1], i1[1] - e.lo[1]);
+    const unsigned zs = axisBits(i0[2] - e.lo[2], i1[2] - e.lo[2]);
+    for (int z = 0; z < kBrickSize; ++z) {
+        if (!(zs >> z & 1u)) continue;
+        for (int y = 0; y < kBrickSize; ++y)
+            if (ys >> y & 1u) mask |= uint64_t(xs) << (kBrickSize * (y + kBrickSize * z));
+    }
+    return mask;
+}
+
+// The brick's occupied voxels that the cylinder meets become occluders, walked over the set
+// bits in order (the rank of a bit is where its counts are); then its samples, by octant.
+void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
+    int i0[3], i1[3];
+    metRange(e, i0, i1);
+    const uint64_t candidates = brick.occupied & brickRangeMask(e, i0, i1);
+    uint32_t rank = 0;
+    for (uint64_t bits = candidates ? brick.occupied : 0; bits; bits &= bits - 1, ++rank) {
+        const int bit = __builtin_ctzll(bits);
+        if (!(candidates >> bit & 1)) continue;
+        const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
+        if (!surelyMet(Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f)) && !voxelMet(x, y, z)) continue;
+        addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
+    }
+    if (!brick.divided()) {
+        gatherBrickSamples(e, brick.firstSample, brick.firstSample + brick.sampleCount);
+        return;
+    }
+    for (int k = 0; k < 8; ++k) {
+        const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
+        if (first != last && octantMayBeReached(e, k)) gatherBrickSamples(e, first, last);
+    }
+}
+
+// Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
+// voxel (clamped to the brick, where the tree put it) gives its slice.
+void CylinderTraversal::gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last) {
+    for (uint32_t i = first; i < last; ++i) {
+        const Vec3 p = (eye_.position[i] - g_.origin) * invVoxel_;
+        const Vec3 d = p - o_;
+        const float along = glm::dot(d, w_);
+        if (!(along > 0.f && along <= L_) || glm::dot(d, d) - along * along >= kernel2_) continue;
+        if (hasNormal_ && glm::dot(d, n_) <= 0.f) continue;
+        int v[3];
+        for (int a = 0; a < 3; ++a) v[a] = std::clamp(int(std::floor(p[a])), int(e.lo[a]), int(e.hi[a]) - 1);
+        const float u = (p[U_] - o_[U_]) - kU_ * (p[N_] - o_[N_]);
+        const float vv = (p[V_] - o_[V_]) - kV_ * (p[N_] - o_[N_]);
+        s_.samples.push_back({i, sliceOf(v[N_]), u, vv});
+        ++st_.samplesReached;
+    }
+}
+
+// A single Occlusion voxel, or a collapsed block: each of its met voxels is an occluder.
+void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
+    if (e.hi[0] - e.lo[0] == 1 && e.hi[1] - e.lo[1] == 1 && e.hi[2] - e.lo[2] == 1) {
+        addOccluder(e.lo[0], e.lo[1], e.lo[2], node.voxel());
+        return;
+    }
+    int i0[3], i1[3];
+    metRange(e, i0, i1);
+    for (int z = i0[2]; z < i1[2]; ++z)
+        for (int y = i0[1]; y < i1[1]; ++y)
+            for (int x = i0[0]; x < i1[0]; ++x)
+                if (voxelMet(x, y, z)) addOccluder(x, y, z, node.voxel());
+}
+
+// An occupied, met voxel strictly in front of the origin's tangent plane adds its occlusion
+// along ω to the cell of its centre's projection, in its (ambiguity-offset) slice; the fill
+// bookkeeping records when each cell becomes full, for the early exit.
+void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel) {
+    const Vec3 c(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f);
+    if (hasNormal_ && glm::dot(c - o_, n_) <= tangentOffset_) return;
+    float occ = 0.f;
+    for (int a = 0; a < 3; ++a) occ += occWeight_[a] * float(voxel.count(side_[a]));
+    occ = std::min(1.f, occ);
+    if (occ <= 0.f) return;
+    const int v[3] = {ix, iy, iz};
+    const int slice = sliceOf(v[N_]) + (voxel.ambiguous() ? ambOffset_[voxel.dominantAxis()] : 0);
+    const int cu = int(std::floor((c[U_] - o_[U_]) - kU_ * (c[N_] - o_[N_]))) + halfU_;
+    const int cv = int(std::floor((c[V_] - o_[V_]) - kV_ * (c[N_] - o_[N_]))) + halfV_;
+    if (cu < 0 || cv < 0 || cu >= sizeU_ || cv >= sizeV_) {
+        ++st_.maskOverflow;
+        return;
+    }
+    const int cell = cu + sizeU_ * cv;
+    s_.occluders.push_back({cell, slice, occ});
+    ++st_.occluders;
+    FillCell& f = s_.fill[size_t(cell)];
+    if (f.stamp != stamp_) f = FillCell{stamp_, 0.f, INT_MIN, INT_MAX};
+    if (f.fullAt == INT_MAX) {
+        f.sum += occ;
+        f.maxSlice = std::max(f.maxSlice, slice);
+        if (f.sum >= 1.f) f.fullAt = f.maxSlice, ++fullCount_;
+    }
+}
+
+// Bounds of the cylinder part in a node: its t-range's disc boxes, clipped to the node.
+void CylinderTraversal::nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const {
+    for (int b = 0; b < 3; ++b) {
+        const float a0 = o_[b] + e.t0 * w_[b], a1 = o_[b] + e.t1 * w_[b];
+        lo[b] = std::max(float(e.lo[b]), std::min(a0, a1) - r_[b]);
+        hi[b] = std::min(float(e.hi[b]), std::max(a0, a1) + r_[b]);
+    }
+}
+
+// The voxels of a node's box that may be met: the cylinder part's bounds, widened a voxel.
+void CylinderTraversal::metRange(const StackEntry& e, int i0[3], int i1[3]) const {
+    Vec3 lo, hi;
+    nodeBounds(e, lo, hi);
+    for (int b = 0; b < 3; ++b) {
+        i0[b] = std::max(int(e.lo[b]), int(std::floor(lo[b])) - 1);
+        i1[b] = std::min(int(e.hi[b]), int(std::ceil(hi[b])) + 1);
+    }
+}
+
+// A point within h' of the axis at a depth t ∈ [0, L] lies in that t's disc, whose box then
+// overlaps its voxel's: the voxel is met without the six divisions.
+bool CylinderTraversal::surelyMet(const Vec3& p) const {
+    const Vec3 d = p - o_;
+    const float along = glm::dot(d, w_);
+    return along >= 0.f && along <= L_ && glm::dot(d, d) - along * along < hOcc_ * hOcc_;
+}
+
+// A voxel is met when the t-range its own six faces allow is not empty (the same range, bit
+// for bit, as the one the splits narrowed down to its leaf).
+bool CylinderTraversal::voxelMet(int x, int y, int z) const {
+    float t0 = 0.f, t1 = L_;
+    const int v[3] = {x, y, z};
+    for (int a = 0; a < 3; ++a) {
+        clipLowerFace(o_[a], w_[a], r_[a], float(v[a]), t0, t1);
+        clipUpperFace(o_[a], w_[a], r_[a], float(v[a] + 1), t0, t1);
+    }
+    return t0 <= t1;
+}
+
+// Whether octant k of a brick (2×2×2 voxels, its bounding sphere) can hold a reached sample:
+// it reaches into the depth range (0, L], within h of the axis, in front of the origin's
+// tangent plane. It only skips per-sample tests, which decide.
+bool CylinderTraversal::octantMayBeReached(const StackEntry& e, int k) const {
+    constexpr float kOctantRadius = 1.7330508f;  // √3 and a little
+    const Vec3 c(float(e.lo[0] + 2 * (k & 1) + 1), float(e.lo[1] + (k & 2) + 1), float(e.lo[2] + (k >> 1 & 2) + 1));
+    const Vec3 d = c - o_;
+    const float along = glm::dot(d, w_);
+    if (along + kOctantRadius <= 0.f || along - kOctantRadius > L_) return false;
+    if (hasNormal_ && glm::dot(d, n_) + kOctantRadius <= 0.f) return false;
+    const float reach = radius_ + kOctantRadius;
+    return glm::dot(d, d) - along * along < reach * reach;
+}
+
+// Early exit: every valid cell the node's points project to (and their bilinear neighbours)
+// was full before the node's first slice.
+bool CylinderTraversal::prunable(const StackEntry& e) const {
+    Vec3 lo, hi;
+    nodeBounds(e, lo, hi);
+    for (int b = 0; b < 3; ++b) lo[b] = std::max(float(e.lo[b]), lo[b] - 1.f), hi[b] = std::min(float(e.hi[b]), hi[b] + 1.f);
+    auto range = [&](int A, float k, int half, int& i0, int& i1) {
+        const float n0 = k * (lo[N_] - o_[N_]), n1 = k * (hi[N_] - o_[N_]);
+        const float uMin = (lo[A] - o_[A]) - std::max(n0, n1), uMax = (hi[A] - o_[A]) - std::min(n0, n1);
+        i0 = int(std::floor(uMin - 0.5f)) - 1 + half;
+        i1 = int(std::floor(uMax - 0.5f)) + 2 + half;
+    };
+    int u0, u1, v0, v1;
+    range(U_, kU_, halfU_, u0, u1);
+    range(V_, kV_, halfV_, v0, v1);
+    if (u0 < 0 || v0 < 0 || u1 >= sizeU_ || v1 >= sizeV_) return false;
+    const int firstSlice = forward_ ? int(e.lo[N_]) : dimN_ - int(e.hi[N_]);
+    for (int j = v0; j <= v1; ++j) {
+        const int i0 = std::max(u0, s_.rowLo[size_t(j)]), i1 = std::min(u1, s_.rowHi[size_t(j)]);
+        const FillCell* row = &s_.fill[size_t(sizeU_) * size_t(j)];
+        for (int i = i0; i <= i1; ++i)
+            if (row[i].stamp != stamp_ || row[i].fullAt >= firstSlice) return false;
+    }
+    return true;
+}
+
+// -- The slice sweep (§5.1) -------------------------------------------------------------------
+
+// Splits the reached samples: those none of whose four bilinear cells holds an occluder read
+// 0 in any slice (V = 1); the others are sorted by slice, as are the occluders (counting sort,
+// stable). Occluders before the first sample's slice are read by every sample: added at once.
+void CylinderTraversal::prepareSweep() {
+    s_.unshadowed.clear();
+    s_.samplesSorted.clear();
+    s_.occludersSorted.clear();
+    size_t kept = 0;
+    for (const SampleEvent& ev : s_.samples) {
+        const int i0 = int(std::floor(ev.u - 0.5f)) + halfU_, j0 = int(std::floor(ev.v - 0.5f)) + halfV_;
+        if (!s_.occluders.empty() &&
+            (touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1)))
+            s_.samples[kept++] = ev;
+        else
+            s_.unshadowed.push_back(ev.index);
+    }
+    s_.samples.resize(kept);
+    if (s_.samples.empty()) {
+        sliceMin_ = 0, sliceMax_ = -1;
+        return;
+    }
+    sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;
+    for (const SampleEvent& ev : s_.samples) sliceMin_ = std::min(sliceMin_, ev.slice), sliceMax_ = std::max(sliceMax_, ev.slice);
+    for (const OccluderEvent& ev : s_.occluders) sliceMax_ = std::max(sliceMax_, ev.slice);  // later ones are harmless
+    const size_t slices = size_t(sliceMax_ - sliceMin_ + 1);
+    auto countingSort = [&](auto& in, auto& out, auto key) {
+        s_.histogram.assign(slices + 1, 0);
+        size_t n = 0;
+        for (const auto& ev : in)
+            if (key(ev) >= sliceMin_) ++s_.histogram[size_t(key(ev) - sliceMin_) + 1], ++n;
+        for (size_t i = 1; i <= slices; ++i) s_.histogram[i] += s_.histogram[i - 1];
+        out.resize(n);
+        for (const auto& ev : in)
+            if (key(ev) >= sliceMin_) out[s_.histogram[size_t(key(ev) - sliceMin_)]++] = ev;
+    };
+    for (const OccluderEvent& ev : s_.occluders)
+        if (ev.slice < sliceMin_) s_.sweep[size_t(ev.cell)] += ev.occ;
+    countingSort(s_.samples, s_.samplesSorted, [](const SampleEvent& ev) { return ev.slice; });
+    countingSort(s_.occluders, s_.occludersSorted, [](const OccluderEvent& ev) { return ev.slice; });
+}
+
+}  // namespace rs

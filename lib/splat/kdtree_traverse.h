@@ -1,0 +1,266 @@
+// Traversal of a photon cylinder through the occlusion tree (paper §5.1–5.3, docs/design.md §8).
+//
+// Takes:   the OcclusionTree, the (tree-sorted) EyeSamples, a Cylinder in voxel space, a
+//          per-thread TraversalScratch and a visitor visit(uint32_t sample, float V).
+// Calls:   visit(i, V) once for every eye sample i the cylinder reaches whose visibility
+//          V = 1 − occlusion is > 0, in no particular order. The splat stage does its own
+//          kernel weight and normal tests; samples with V = 0 are not handed over.
+// Space:   voxel space; the cylinder axis is o + tω, t ∈ [0, L], radius h.
+//
+// Definitions (the brute force in tests/kdtree_test.cpp implements the same independently):
+//  • Bounds (§5.1). The traversal uses the radius h' = h + 0.6 (kOccluderMargin, see
+//    "valid cells"). Per axis b, the disc perpendicular to ω has half-extent
+//    r_b = h'·sqrt(1 − ω_b²). A voxel box [lo, hi) is *met* when some t ∈ [0, L] has
+//    o_a + tω_a ∈ [lo_a − r_a, hi_a + r_a] on all three axes (the disc's bounding box
+//    touches the box). Each face gives a one-sided bound on t; the traversal applies a
+//    split's face when it descends, so a leaf's t-range equals the one computed from its own
+//    six faces, bit for bit. An eye sample p is *reached* when it lies inside the cylinder —
+//    depth (p − o)·ω ∈ (0, L] and distance to the axis line < h (d⊥² = |p − o|² −
+//    ((p − o)·ω)²) — and, when the origin has a normal n_o, in front of its tangent plane,
+//    (p − o)·n_o > 0 (light leaving a surface does not reach the space behind it; at the
+//    paper's settings on the glossy box this drops 42 % of the samples a cylinder met,
+//    mostly those on the surface the photon leaves). Its voxel is then met (h < h'). Samples
+//    outside the kernel get nothing anyway, and their reads would reach cells no occluder
+//    was gathered for.
+//  • Mask (§5.1). N = the axis of largest |ω| (ties: lowest), U = N+1, V = N+2 (mod 3).
+//    A point p maps to u = (p_U − o_U) − (ω_U/ω_N)(p_N − o_N), likewise v: its projection
+//    along ω onto the plane through o perpendicular to N. Cell (i, j) = (⌊u⌋, ⌊v⌋), centre
+//    (i + ½, j + ½).
+//  • Occluders (§5.2). A met, occupied voxel whose box lies strictly in front of the
+//    tangent plane at o — (centre − o)·n_o > ½‖n_o‖₁, skipped when n_o = 0 — adds to the
+//    cell of its centre's projection the occlusion of its back-facing surfaces along ω:
+//    occ = min(1, Σ_a |ω_a|/(16|ω_N|) · c_{a, sign ω_a}) (sides whose normal points along
+//    ω_a: the photon meets their back, projected onto the N plane).
+//  • Precedence. Slices are voxel layers along N counted in the direction of ω
+//    (s = v_N, or dims_N − 1 − v_N when ω_N < 0). An occluder belongs to its slice; an
+//    ambiguous one (both signs on an axis, §5.3) to its slice + k with
+//    k = clamp(⌈|ω_N| / |ω_D|⌉, 1, 4), D its dominant axis (largest c₊ + c₋): its occlusion
+//    distance is pushed one voxel along D (t += 1/|ω_D|, that many N slices), so a thin
+//    double-sided surface does not shadow its own lit side. A sample in slice s sees the
+//    cells' sums over the occluders of slices < s, each capped at 1 (the cell is full) —
+//    never its own voxel's occlusion, nor a neighbour's in the same slice.
+//  • Valid cells. A cell is valid when its centre, as a point of the N plane through o,
+//    lies within h + 0.71 of the axis line. Every voxel whose centre projects into a valid
+//    cell has its centre within h + 0.71 + √2/2 < h' + √3/2 of the axis, so (inside the t
+//    range) the voxel is met: a valid cell has all its occluders. A reached sample's nearest
+//    cell centre is within √2/2 of it, so it always has a valid neighbour.
+//  • V = 1 − bilinear interpolation of those capped cell values between the 4 cell centres
+//    nearest to the sample's (u, v), over the valid ones, the weights renormalised. Without
+//    the validity rule a sample near the rim would read half-empty cells outside the
+//    cylinder and light would leak through walls at small h.
+// The definition does not depend on the kd order: the traversal collects the met
+// occluders and reached samples (CylinderTraversal::gather), then sweeps them slice by slice
+// (sweep); a sample none of whose four cells holds an occluder reads V = 1 at once. Near-to-far kd order
+// (lower child first iff ω_a ≥ 0) serves the early exit: once a node's every sample would
+// read full cells and its occluders could only add to full cells — all the cells its
+// projection touches were filled by occluders of slices before the node's first slice — it
+// is skipped (a wall stops the traversal behind it). Only valid cells count. Cylinder parts
+// outside the grid or past L are never visited. At a brick leaf the occupied voxels (its mask's
+// bits inside the cylinder part's bounds) that are met become occluders and its samples that
+// are reached are collected (octants of the brick out of the cylinder's reach are skipped
+// whole); a collapsed Occlusion block contributes each of its met voxels.
+#pragma once
+
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "splat/eye.h"
+#include "splat/kdtree.h"
+
+namespace rs {
+
+struct Cylinder {
+    Vec3 origin{0.f};        // o, voxel space
+    Vec3 dir{0.f, 0.f, 1.f};  // ω, unit
+    float radius = 1.f;       // h, voxels
+    float length = 0.f;       // L, voxels
+    Vec3 originNormal{0.f};   // n_o, unit normal of the surface the photon leaves; zero if none
+};
+
+struct TraversalStats {
+    uint64_t cylinders = 0, nodes = 0, pruned = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
+    uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
+    void add(const TraversalStats& o) {
+        cylinders += o.cylinders, nodes += o.nodes, pruned += o.pruned, occluders += o.occluders;
+        samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
+    }
+};
+
+constexpr int kMaxAmbiguousOffset = 4;    // N slices
+constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
+constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
+
+namespace kd_detail {
+
+struct StackEntry {
+    uint32_t node;
+    float t0, t1;
+    uint16_t lo[3], hi[3];
+};
+struct OccluderEvent {
+    int32_t cell, slice;
+    float occ;
+};
+struct SampleEvent {
+    uint32_t index;
+    int32_t slice;
+    float u, v;
+};
+struct FillCell {  // early-exit bookkeeping, valid when stamp matches the cylinder
+    uint32_t stamp = 0;
+    float sum = 0;
+    int32_t maxSlice = INT_MIN, fullAt = INT_MAX;
+};
+
+// One face of a box clips the axis parameter range (§5.1): o + tω within r of the face.
+inline void clipLowerFace(float o, float w, float r, float lo, float& t0, float& t1) {
+    float d = (lo - r) - o;
+    if (w > 0.f) t0 = std::max(t0, d / w);
+    else if (w < 0.f) t1 = std::min(t1, d / w);
+    else if (d > 0.f) t0 = kInf;
+}
+inline void clipUpperFace(float o, float w, float r, float hi, float& t0, float& t1) {
+    float d = (hi + r) - o;
+    if (w > 0.f) t1 = std::min(t1, d / w);
+    else if (w < 0.f) t0 = std::max(t0, d / w);
+    else if (d < 0.f) t0 = kInf;
+}
+
+inline int majorAxis(const Vec3& w) {
+    int n = 0;
+    for (int a = 1; a < 3; ++a)
+        if (std::abs(w[a]) > std::abs(w[n])) n = a;
+    return n;
+}
+
+}  // namespace kd_detail
+
+// Per-thread scratch: the stack, the mask and the event lists grow to the largest cylinder
+// seen and are reused, so traversal allocates nothing in steady state.
+class TraversalScratch {
+public:
+    std::vector<kd_detail::StackEntry> stack;
+    std::vector<kd_detail::FillCell> fill;
+    std::vector<float> sweep;
+    std::vector<kd_detail::OccluderEvent> occluders, occludersSorted;
+    std::vector<kd_detail::SampleEvent> samples, samplesSorted;
+    std::vector<uint32_t> unshadowed;  // reached samples that read V = 1 in any slice
+    std::vector<uint32_t> histogram;
+    std::vector<int> rowLo, rowHi;  // the valid cells of each mask row
+    uint32_t stamp = 0;
+};
+
+// One cylinder's traversal, in the paper's steps: the mask is set up by the constructor
+// (§5.1), gather() walks the tree near to far and collects the met occluders and the reached
+// samples (§5.1–5.3), sweep() reads each sample's visibility slice by slice (§5.1).
+class CylinderTraversal {
+public:
+    CylinderTraversal(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl, TraversalScratch& s);
+
+    void gather();
+    template <class Visit>
+    void sweep(Visit&& visit);
+    const TraversalStats& stats() const { return st_; }
+
+private:
+    using StackEntry = kd_detail::StackEntry;
+    using SampleEvent = kd_detail::SampleEvent;
+
+    // Mask set-up.
+    void findValidRows();
+    bool validCell(int i, int j) const;  // relative to the mask centre
+    bool validMaskCell(int i, int j) const { return i >= s_.rowLo[size_t(j)] && i <= s_.rowHi[size_t(j)]; }
+    int sliceOf(int vN) const { return forward_ ? vN : dimN_ - 1 - vN; }
+
+    // Gathering.
+    void descend(const StackEntry& e, Node node);
+    void gatherBrick(const StackEntry& e, const Brick& brick);
+    void gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last);
+    void gatherOcclusionBlock(const StackEntry& e, Node node);
+    void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
+    void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;
+    void metRange(const StackEntry& e, int i0[3], int i1[3]) const;
+    bool surelyMet(const Vec3& p) const;
+    bool voxelMet(int x, int y, int z) const;
+    bool octantMayBeReached(const StackEntry& e, int k) const;
+    bool prunable(const StackEntry& e) const;
+
+    // Sweep.
+    void prepareSweep();
+    float read(const SampleEvent& ev) const;
+    bool touched(int i, int j) const {
+        return i >= 0 && j >= 0 && i < sizeU_ && j < sizeV_ && s_.fill[size_t(i) + size_t(sizeU_) * size_t(j)].stamp == stamp_;
+    }
+
+    const OcclusionTree& tree_;
+    const EyeSamples& eye_;
+    const GridGeometry& g_;
+    TraversalScratch& s_;
+    TraversalStats st_;
+    Vec3 o_, w_, n_;
+    float L_, radius_, invVoxel_, hOcc_, kernel2_, valid2_, kU_, kV_, tangentOffset_;
+    float r_[3], occWeight_[3];
+    int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
+    int side_[3], ambOffset_[3];
+    bool forward_, hasNormal_;
+    uint32_t stamp_ = 0;
+    size_t fullCount_ = 0;
+    int sliceMin_ = 0, sliceMax_ = 0;  // the sweep's slices
+};
+
+// V = 1 − the bilinear interpolation of the capped cell values between the 4 cell centres
+// nearest to the sample's (u, v), over the valid ones, the weights renormalised.
+inline float CylinderTraversal::read(const SampleEvent& ev) const {
+    float x = ev.u - 0.5f, y = ev.v - 0.5f;
+    float fx0 = std::floor(x), fy0 = std::floor(y);
+    int i0 = int(fx0) + halfU_, j0 = int(fy0) + halfV_;
+    float fx = x - fx0, fy = y - fy0;
+    // Valid cells only; num ≤ den term by term, so occ ≤ 1 and four full cells give exactly 1.
+    float num = 0.f, den = 0.f;
+    auto cell = [&](int i, int j, float weight) {
+        if (weight <= 0.f) return;
+        if (j >= 0 && j < sizeV_ ? !validMaskCell(i, j) : !validCell(i - halfU_, j - halfV_)) return;
+        float c = i < 0 || j < 0 || i >= sizeU_ || j >= sizeV_ ? 0.f : std::min(1.f, s_.sweep[size_t(i) + size_t(sizeU_) * j]);
+        num += weight * c;
+        den += weight;
+    };
+    cell(i0, j0, (1.f - fx) * (1.f - fy));
+    cell(i0 + 1, j0, fx * (1.f - fy));
+    cell(i0, j0 + 1, (1.f - fx) * fy);
+    cell(i0 + 1, j0 + 1, fx * fy);
+    return den > 0.f ? 1.f - num / den : 1.f;
+}
+
+// Unshadowed samples first; then slice by slice, a slice's samples read the mask before its
+// occluders enter it.
+template <class Visit>
+void CylinderTraversal::sweep(Visit&& visit) {
+    prepareSweep();
+    for (uint32_t i : s_.unshadowed) visit(i, 1.f);
+    st_.samplesVisited += s_.unshadowed.size();
+    size_t is = 0, io = 0;
+    const std::vector<SampleEvent>& samples = s_.samplesSorted;
+    const std::vector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
+    for (int slice = sliceMin_; slice <= sliceMax_ && is < samples.size(); ++slice) {
+        for (; is < samples.size() && samples[is].slice == slice; ++is) {
+            const float vis = read(samples[is]);
+            if (vis > 0.f) visit(samples[is].index, vis), ++st_.samplesVisited;
+        }
+        for (; io < occluders.size() && occluders[io].slice == slice; ++io) s_.sweep[size_t(occluders[io].cell)] += occluders[io].occ;
+    }
+    // The sweep mask is all zero between cylinders: clear what this one touched.
+    for (const kd_detail::OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
+}
+
+template <class Visit>
+void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl, TraversalScratch& s,
+                      Visit&& visit, TraversalStats* statsOut = nullptr) {
+    CylinderTraversal traversal(tree, eye, cyl, s);
+    traversal.gather();
+    traversal.sweep(visit);
+    if (statsOut) statsOut->add(traversal.stats());
+}
+
+}  // namespace rs

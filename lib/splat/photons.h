@@ -1,0 +1,67 @@
+// Photon tracing (docs/design.md §7, paper §3): paths from the lights with a scrambled Halton
+// sequence indexed by the path number; every segment x(i−1) → x(i) that ends on a
+// non-specular surface is stored as a photon ray of class direct, caustic or indirect, with
+// per-class quotas, flux normalised by the paths emitted until the class's quota filled, and
+// a splat radius from the path pdf. World space, metres; flux in W.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/math.h"
+
+namespace rs {
+
+class RayAccel;
+class LightSampler;
+class ThreadPool;
+class Reporter;
+struct Scene;
+
+enum PhotonClass : uint8_t { kPhotonDirect = 0, kPhotonIndirect = 1, kPhotonCaustic = 2, kPhotonClassCount = 3 };
+const char* photonClassName(int c);
+
+struct PhotonRay {
+    Vec3 origin;        // x(i−1)
+    float length;       // distance to x(i), the surface it ends on
+    Vec3 dir;           // unit
+    float radius;       // splat radius h, metres
+    Vec3 flux;          // W, already divided by the class's path count
+    uint32_t originNormal;  // encodeUnit of the tangent plane's normal at x(i−1) (side of dir); 0: none
+    float density;      // p⊥ of the photon at x(i) per path (1/m²), for the radius
+    float reach;        // how far past x(i) the kernel reaches, in radii: tan θ at x(i), clamped to [1, 16]
+    uint8_t cls;        // PhotonClass
+    uint8_t pad[3] = {0, 0, 0};  // no indeterminate bytes: photon arrays compare with memcmp
+
+    // A segment meeting a flat receiver at angle θ from its normal puts the parallel rays of
+    // its kernel disc down up to h·tan θ past x(i): the cylinder must reach that far.
+    static float reachOf(float cosTheta);
+};
+
+struct PhotonSettings {
+    int64_t photons = 100000;               // M, total stored photon rays
+    float split[kPhotonClassCount] = {0.2f, 0.5f, 0.3f};  // direct, indirect, caustic (paper)
+    float k[kPhotonClassCount] = {16.f, 32.f, 16.f};        // photons wanted under a kernel
+    float minRadius[kPhotonClassCount] = {1.f, 6.f, 1.f};   // voxels
+    float maxRadius[kPhotonClassCount] = {16.f, 24.f, 16.f};  // voxels
+    float voxelSize = 0.01f;                 // metres, to express the clamps
+    int maxDepth = 32;                       // segments a path
+    uint64_t seed = 0;
+    uint64_t firstPath = 0;                  // sequence offset (progressive passes)
+    static constexpr int kPathsPerPassBits = 40;  // pass p traces paths from p · 2^40: ranges never overlap
+    float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
+    int64_t maxPaths = 0;                    // 0: 50 × photons
+};
+
+struct PhotonMap {
+    std::vector<PhotonRay> rays;               // in path order
+    int64_t pathsFor[kPhotonClassCount] = {};  // N_c: paths emitted until the quota filled
+    int64_t count[kPhotonClassCount] = {};
+    int64_t pathsTraced = 0;
+    size_t bytes() const { return rays.size() * sizeof(PhotonRay); }
+};
+
+PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSampler& lights,
+                       const PhotonSettings& settings, ThreadPool& pool, Reporter& reporter);
+
+}  // namespace rs

@@ -1,0 +1,211 @@
+// The splat stage. Photon rays are processed in chunks on the thread pool; each thread
+// accumulates into its own fixed-point buffer (2^-32 resolution, 2^31 range per pixel and
+// channel); the buffers are summed at the end. Integer addition is associative, so the image
+// is bit-identical whatever the thread count or scheduling (determinism: docs/design.md §2).
+#include "splat/splat.h"
+
+#include <algorithm>
+#include <mutex>
+
+#include "scene/accel.h"
+#include "core/log.h"
+#include "core/parallel.h"
+
+namespace rs {
+
+namespace {
+
+constexpr double kFixedScale = 4294967296.0;  // 2^32
+constexpr int kSplatLayers = 3;               // direct, indirect, caustic = photon classes
+static_assert(int(kPhotonDirect) == int(kDirect) && int(kPhotonIndirect) == int(kIndirect) &&
+                  int(kPhotonCaustic) == int(kCaustic),
+              "photon classes index the film's layers");
+
+inline int64_t toFixed(float v) {
+    double x = double(v) * kFixedScale;
+    return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
+}
+
+// Bits of x spread to every third position (x < 2^10).
+inline uint32_t spreadBits(uint32_t x) {
+    x = (x | x << 16) & 0x030000ffu;
+    x = (x | x << 8) & 0x0300f00fu;
+    x = (x | x << 4) & 0x030c30c3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+}
+
+// The order in which photon rays are splatted: by the Morton code of the brick their hit lies
+// in, so that consecutive rays read the same part of the tree, the eye samples and the film
+// (most of a kernel's receivers lie around the hit). Ties keep the photon order. Any order
+// gives the same image: the film sums are integers.
+std::vector<uint32_t> coherentOrder(const PhotonMap& photons, const GridGeometry& g) {
+    const size_t n = photons.rays.size();
+    std::vector<uint64_t> keyed(n);
+    for (size_t i = 0; i < n; ++i) {
+        const PhotonRay& r = photons.rays[i];
+        const Vec3 hit = g.voxelFromWorld(r.origin + r.length * r.dir) / float(kBrickSize);
+        uint32_t code = 0;
+        for (int a = 0; a < 3; ++a) {
+            const float c = std::clamp(hit[a], 0.f, 1023.f);
+            code |= spreadBits(uint32_t(c == c ? c : 0.f)) << a;
+        }
+        keyed[i] = uint64_t(code) << 32 | uint64_t(i);
+    }
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<uint32_t> order(n);
+    for (size_t i = 0; i < n; ++i) order[i] = uint32_t(keyed[i]);
+    return order;
+}
+
+}  // namespace
+
+void SplatStats::add(const SplatStats& o) {
+    traversal.add(o.traversal);
+    contributions += o.contributions;
+    visibilityRays += o.visibilityRays;
+    for (int i = 0; i < SegmentReceivers::kVerdictCount; ++i) refused[i] += o.refused[i];
+}
+
+SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray)
+    : accel_(accel), origin_(ray.origin),
+      originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {}
+
+uint32_t SegmentReceivers::hidden(const Vec3* y, const Vec3* ng, int count) const {
+    // V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
+    Vec3 lifted[RayAccel::kPacket];
+    for (int i = 0; i < count; ++i) lifted[i] = y[i] + rayOriginOffset(y[i]) * ng[i];
+    return accel_.occludedToPoint(lifted, count, origin_);
+}
+
+namespace {
+
+// Contributions waiting for rule 2, which is asked a packet at a time; those whose sample
+// turns out hidden are dropped, the others added to the thread's film buffer.
+class PendingContributions {
+public:
+    PendingContributions(const SegmentReceivers& receivers, SplatStats& stats) : receivers_(receivers), stats_(stats) {}
+    ~PendingContributions() { flush(); }
+
+    void add(const Vec3& y, const Vec3& ng, int64_t* pixel, const Vec3& c) {
+        y_[count_] = y, ng_[count_] = ng, pixel_[count_] = pixel, c_[count_] = c;
+        if (++count_ == RayAccel::kPacket) flush();
+    }
+    void flush() {
+        if (count_ == 0) return;
+        const uint32_t hidden = receivers_.hidden(y_, ng_, count_);
+        stats_.visibilityRays += uint64_t(count_);
+        for (int i = 0; i < count_; ++i) {
+            if (hidden >> i & 1u) {
+                ++stats_.refused[SegmentReceivers::kHidden];
+                continue;
+            }
+            addFixed(pixel_[i], c_[i]);
+            ++stats_.contributions;
+        }
+        count_ = 0;
+    }
+    static void addFixed(int64_t* px, const Vec3& c) {
+        px[0] += toFixed(c.x);
+        px[1] += toFixed(c.y);
+        px[2] += toFixed(c.z);
+    }
+
+private:
+    const SegmentReceivers& receivers_;
+    SplatStats& stats_;
+    int count_ = 0;
+    Vec3 y_[RayAccel::kPacket], ng_[RayAccel::kPacket], c_[RayAccel::kPacket];
+    int64_t* pixel_[RayAccel::kPacket];
+};
+
+}  // namespace
+
+void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  Reporter& reporter, SplatStats* statsOut) {
+    const GridGeometry& g = tree.geometry;
+    const size_t pixels = film.pixelCount();
+    const int threads = pool.size();
+    std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
+    std::vector<TraversalScratch> scratch(threads);
+    std::vector<SplatStats> stats(threads);
+    const int64_t n = int64_t(photons.rays.size());
+    const std::vector<uint32_t> order = coherentOrder(photons, g);
+
+    reporter.begin("splatting", n, "photons");
+    pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
+        std::vector<int64_t>& buf = acc[thread];
+        if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
+        SplatStats& st = stats[thread];
+        for (int64_t p = b; p < e; ++p) {
+            const PhotonRay& ray = photons.rays[order[size_t(p)]];
+            const float h = ray.radius, h2 = h * h;
+            const Vec3 o = ray.origin, w = ray.dir;
+            Cylinder cyl;
+            cyl.origin = g.voxelFromWorld(o);
+            cyl.dir = w;
+            cyl.radius = h / g.voxelSize;
+            const float end = ray.length + h * ray.reach;  // past the hit as far as the kernel lands
+            cyl.length = end / g.voxelSize;
+            // The traversal leaves out samples behind the origin's tangent plane (rule 1), unless
+            // there is no visibility at all.
+            cyl.originNormal = ray.originNormal && settings.visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
+            int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
+            const SegmentReceivers receivers(accel, ray);
+            PendingContributions pending(receivers, st);
+
+            traverseCylinder(tree, samples, cyl, scratch[thread], [&](uint32_t i, float visibility) {
+                // Only samples in front of the ray's origin, inside the kernel, facing the photon.
+                Vec3 y = samples.position[i];
+                Vec3 oy = y - o;
+                float t = glm::dot(oy, w);
+                if (t <= 0.f || t > end) return;
+                float d2 = glm::dot(oy, oy) - t * t;
+                if (d2 >= h2) return;
+                Vec3 n = decodeUnit16(samples.normal[i]);
+                float cosTheta = glm::dot(n, w);
+                if (cosTheta >= 0.f) return;
+                Vec3 ng = decodeUnit16(samples.geomNormal[i]);
+                if (glm::dot(ng, w) >= 0.f) return;
+                if (settings.visibility && !receivers.inFrontOfOrigin(y)) {
+                    ++st.refused[SegmentReceivers::kBehindOrigin];
+                    return;
+                }
+
+                // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
+                Vec3 f = samples.weightedF(i, n, -w, -cosTheta);
+                float scale = biweightKernel(std::max(d2, 0.f), h2) * -cosTheta * visibility;
+                Vec3 c = f * ray.flux * scale;
+                if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
+                int64_t* px = &layer[size_t(samples.pixel[i]) * 3];
+                if (settings.visibility) {
+                    pending.add(y, ng, px, c);
+                } else {
+                    PendingContributions::addFixed(px, c);
+                    ++st.contributions;
+                }
+            }, &st.traversal);
+            pending.flush();
+        }
+        reporter.advance(e - b);
+    });
+    reporter.end();
+
+    // Sum the threads' buffers (integers: any order gives the same sum) into the film.
+    for (int l = 0; l < kSplatLayers; ++l) {
+        for (size_t px = 0; px < pixels; ++px) {
+            int64_t sum[3] = {0, 0, 0};
+            for (const std::vector<int64_t>& buf : acc) {
+                if (buf.empty()) continue;
+                for (int c = 0; c < 3; ++c) sum[c] += buf[(size_t(l) * pixels + px) * 3 + c];
+            }
+            film.layers[l][px] += Vec3(float(double(sum[0]) / kFixedScale), float(double(sum[1]) / kFixedScale),
+                                       float(double(sum[2]) / kFixedScale));
+        }
+    }
+    if (statsOut)
+        for (const SplatStats& s : stats) statsOut->add(s);
+}
+
+}  // namespace rs

@@ -1,0 +1,77 @@
+// Splatting in ray space (docs/design.md §8, paper §2 eq. 2 and §5.1): every photon ray traverses
+// the occlusion tree as a cylinder of its splat radius h; each visible eye sample y in it
+// receives
+//     w · f_r(y, −ω, ωo) · Φ · K_h(d⊥) · |n·ω| · V
+// where d⊥ is y's distance to the ray's line, K_h the biweight kernel normalised over the
+// disc of radius h perpendicular to ω, and V the occlusion mask's visibility at y. Light
+// lands in the film layer of the photon's class (direct, indirect, caustic).
+#pragma once
+
+#include "output/film.h"
+#include "splat/kdtree_traverse.h"
+#include "splat/photons.h"
+
+namespace rs {
+
+class ThreadPool;
+class Reporter;
+class RayAccel;
+
+struct SplatStats {
+    TraversalStats traversal;
+    uint64_t contributions = 0;  // (photon, eye sample) pairs that received energy
+    uint64_t visibilityRays = 0;  // Embree occlusion rays of the receiver rules
+    uint64_t refused[2] = {};     // samples the receiver rules refused, by SegmentReceivers::Verdict
+    void add(const SplatStats& o);
+};
+
+// The receiver rules of one photon segment x(i−1) → x(i) (world space): whether an eye
+// sample y in the segment's cylinder may take its light at all. Both are exact in the
+// scene's geometry, so they hold whatever the grid and the radius:
+//  1. Origin: y lies in front of the tangent plane of the surface the segment leaves,
+//     (y − x(i−1))·n > 0: light leaving a surface does not reach the space behind it.
+//  2. Visibility: the straight line from y (lifted off its surface to the side it is seen
+//     from) to x(i−1) crosses no surface — equation (2)'s V(y, x(i−1)) itself, one Embree
+//     occlusion ray. The mask approximates it by parallel rays along ω, which miss a wall
+//     that runs beside the ray, and count only the back-facing side of a wall, whose
+//     discrete occlusion sums can fall short of full; this catches both. A sample behind
+//     the surface the segment ends on is behind it as seen from x(i−1) too.
+class SegmentReceivers {
+public:
+    enum Verdict { kReceives = -1, kBehindOrigin = 0, kHidden = 1, kVerdictCount = 2 };
+
+    SegmentReceivers(const RayAccel& accel, const PhotonRay& ray);
+    // Rule 1 for y.
+    bool inFrontOfOrigin(const Vec3& y) const {
+        return !hasOriginNormal_ || glm::dot(y - origin_, originNormal_) > 0.f;
+    }
+    // Rule 2 for up to RayAccel::kPacket samples at once (y: position; ng: geometric normal on
+    // the side y is seen from): bit i set when sample i is hidden from x(i−1).
+    uint32_t hidden(const Vec3* y, const Vec3* ng, int count) const;
+
+private:
+    const RayAccel& accel_;
+    Vec3 origin_, originNormal_;
+    bool hasOriginNormal_;
+};
+
+// Biweight kernel over the disc of radius h: ∫ K dA = 1.
+inline float biweightKernel(float d2, float h2) {
+    float x = 1.f - d2 / h2;
+    return x <= 0.f ? 0.f : 3.f / (kPi * h2) * x * x;
+}
+
+struct SplatSettings {
+    // The paper's method: the tree's mask and the receiver rules. Off for splat-novis, ray
+    // splatting without visibility (the paper's Fig. 4b), whose tree holds no occluders.
+    bool visibility = true;
+};
+
+// Adds the photons' light to `film` (direct, indirect and caustic layers; pixel = eye
+// sample's pixel index). The result does not depend on the thread count: contributions are
+// summed as 64-bit fixed-point integers, whose sum does not depend on order.
+void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  Reporter& reporter, SplatStats* stats = nullptr);
+
+}  // namespace rs
