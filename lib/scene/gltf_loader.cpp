@@ -1,0 +1,127 @@
+// The glTF loader's entry, the file, the node hierarchy and cameras (gltf_loader.h).
+#include "scene/gltf_loader.h"
+
+#include <filesystem>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <set>
+
+namespace rs::gltf {
+
+namespace {
+
+const std::set<std::string> kSupportedExtensions = {
+    "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
+    "KHR_materials_ior"};
+
+std::string firstLine(std::string s) {
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+    size_t nl = s.find('\n');
+    return nl == std::string::npos ? s : s.substr(0, nl);
+}
+
+}  // namespace
+
+Scene GltfLoader::load() {
+    readFile();
+    checkExtensions();
+    scene_.path = path_;
+    loadMaterials();
+    loadLights();
+
+    // Flatten the node hierarchy of the default scene into world space.
+    if (model_.scenes.empty()) fail("the file has no scene");
+    int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+    if (sceneIndex >= int(model_.scenes.size())) fail("'scene' " + std::to_string(sceneIndex) + " does not exist");
+    for (int root : model_.scenes[sceneIndex].nodes) visitNode(root, Mat4(1.f), 0);
+
+    if (scene_.triangleCount() == 0) fail("the scene has no triangles");
+    scene_.computeBounds();
+    // tinygltf's warning only once the load succeeded: a failed load is one error line.
+    if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
+    return std::move(scene_);
+}
+
+void GltfLoader::fail(const std::string& what, ErrorKind kind) const {
+    throw Error(kind, path_ + ": " + what);
+}
+
+void GltfLoader::readFile() {
+    std::error_code ec;
+    if (!std::filesystem::exists(path_, ec)) fail("no such file", ErrorKind::Io);
+    if (std::filesystem::is_directory(path_, ec)) fail("is a directory, not a glTF file", ErrorKind::Io);
+    tinygltf::TinyGLTF gltf;
+    std::string err, warn;
+    std::string ext = std::filesystem::path(path_).extension().string();
+    for (char& c : ext) c = char(std::tolower(c));
+    bool ok = ext == ".glb" ? gltf.LoadBinaryFromFile(&model_, &err, &warn, path_)
+                            : gltf.LoadASCIIFromFile(&model_, &err, &warn, path_);
+    if (!ok) fail("cannot load glTF: " + firstLine(err.empty() ? "unknown error" : err));
+    if (!warn.empty()) gltfWarning_ = firstLine(warn);
+}
+
+void GltfLoader::checkExtensions() {
+    for (const std::string& e : model_.extensionsRequired)
+        if (!kSupportedExtensions.count(e))
+            fail("required extension '" + e + "' is not supported");
+}
+
+void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
+    if (index < 0 || index >= int(model_.nodes.size()))
+        fail("node " + std::to_string(index) + " does not exist");
+    if (depth > 256) fail(quoted("node", index, model_.nodes[index].name) + ": node hierarchy has a cycle");
+    const tinygltf::Node& node = model_.nodes[index];
+    std::string where = quoted("node", index, node.name);
+
+    Mat4 local(1.f);
+    if (node.matrix.size() == 16) {
+        for (int k = 0; k < 16; ++k) glm::value_ptr(local)[k] = float(node.matrix[k]);
+    } else {
+        Mat4 t(1.f), r(1.f), s(1.f);
+        if (node.translation.size() == 3)
+            t = glm::translate(Mat4(1.f), Vec3(node.translation[0], node.translation[1], node.translation[2]));
+        if (node.rotation.size() == 4)
+            r = glm::mat4_cast(glm::normalize(glm::quat(float(node.rotation[3]), float(node.rotation[0]),
+                                                        float(node.rotation[1]), float(node.rotation[2]))));
+        if (node.scale.size() == 3) s = glm::scale(Mat4(1.f), Vec3(node.scale[0], node.scale[1], node.scale[2]));
+        local = t * r * s;
+    }
+    Mat4 world = parent * local;
+    for (int c = 0; c < 4; ++c)
+        if (!isFinite(Vec3(world[c])) || !std::isfinite(world[c].w)) fail(where + " has a non-finite transform");
+
+    if (node.mesh >= 0) addMesh(node.mesh, world, where);
+    if (node.camera >= 0) addCamera(node.camera, world, where);
+    auto ext = node.extensions.find("KHR_lights_punctual");
+    if (ext != node.extensions.end() && ext->second.Has("light")) {
+        int li = ext->second.Get("light").GetNumberAsInt();
+        if (li < 0 || li >= int(lightTemplates_.size())) fail(where + " references light " + std::to_string(li) + " which does not exist");
+        PunctualLight l = lightTemplates_[li];
+        l.position = Vec3(world[3]);
+        l.direction = glm::normalize(-Vec3(world[2]));
+        scene_.lights.push_back(l);
+    }
+    for (int child : node.children) visitNode(child, world, depth + 1);
+}
+
+void GltfLoader::addCamera(int index, const Mat4& world, const std::string& nodeWhere) {
+    if (index >= int(model_.cameras.size())) fail(nodeWhere + " references camera " + std::to_string(index) + " which does not exist");
+    const tinygltf::Camera& c = model_.cameras[index];
+    if (c.type != "perspective") {
+        reporter_.warn(path_ + ": " + quoted("camera", index, c.name) + " is " + c.type + "; only perspective cameras are used");
+        return;
+    }
+    Camera cam;
+    cam.name = c.name.empty() ? "camera " + std::to_string(index) : c.name;
+    cam.position = Vec3(world[3]);
+    cam.forward = glm::normalize(-Vec3(world[2]));
+    cam.right = glm::normalize(glm::cross(cam.forward, Vec3(world[1])));
+    cam.up = glm::cross(cam.right, cam.forward);
+    cam.yfov = float(c.perspective.yfov);
+    cam.aspect = float(c.perspective.aspectRatio);
+    if (!(cam.yfov > 0.f && cam.yfov < kPi) || !isFinite(cam.forward) || !isFinite(cam.right))
+        fail(quoted("camera", index, c.name) + " has an invalid yfov or transform");
+    scene_.cameras.push_back(cam);
+}
+
+}  // namespace rs::gltf

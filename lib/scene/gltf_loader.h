@@ -1,0 +1,65 @@
+// The glTF loader (docs/design.md §3): one class whose parts live in three files —
+// gltf_loader.cpp (the file, the node hierarchy, cameras), gltf_materials.cpp (materials,
+// textures, KHR_lights_punctual) and gltf_meshes.cpp (accessors, meshes). Internal to
+// lib/scene/: only these files include tinygltf (Debian's compiled library: no
+// TINYGLTF_IMPLEMENTATION here). Every error names the file and the glTF object it was found
+// in; nothing is dropped silently: non-triangle primitives are skipped with a warning.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "scene/scene.h"
+
+namespace rs::gltf {
+
+// "material 3 'red'": how messages name a glTF object.
+inline std::string quoted(const std::string& kind, int index, const std::string& name) {
+    std::string s = kind + " " + std::to_string(index);
+    if (!name.empty()) s += " '" + name + "'";
+    return s;
+}
+
+class GltfLoader {
+public:
+    GltfLoader(const std::string& path, Reporter& reporter) : path_(path), reporter_(reporter) {}
+    Scene load();
+
+private:
+    // -- The file, the node hierarchy, cameras (gltf_loader.cpp)
+    [[noreturn]] void fail(const std::string& what, ErrorKind kind = ErrorKind::Scene) const;
+    void readFile();
+    void checkExtensions();
+    void visitNode(int index, const Mat4& parent, int depth);
+    void addCamera(int index, const Mat4& world, const std::string& nodeWhere);
+    // -- Materials, textures, KHR_lights_punctual (gltf_materials.cpp)
+    void loadMaterials();
+    int loadTexture(int textureIndex, const std::string& where);
+    void loadLights();
+    // -- Accessors and meshes (gltf_meshes.cpp)
+    // Reads accessor `index` as `n` floats per element (normalized integers become [0,1]),
+    // checking every byte it touches lies inside its buffer.
+    std::vector<float> readFloats(int index, int n, const std::string& where);
+    std::vector<uint32_t> readIndices(int index, const std::string& where);
+    const tinygltf::Accessor& accessor(int index, const std::string& where);
+    template <class F>
+    void forEachComponent(int index, const std::string& where, F&& f);
+    void addMesh(int meshIndex, const Mat4& world, const std::string& nodeWhere);
+    static std::vector<uint32_t> triangulate(const std::vector<uint32_t>& idx, int mode);
+
+    std::string path_;
+    Reporter& reporter_;
+    tinygltf::Model model_;
+    Scene scene_;
+    uint32_t defaultMaterial_ = 0;
+    std::vector<PunctualLight> lightTemplates_;
+    std::map<int, int> textureOfImage_;
+    std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
+};
+
+}  // namespace rs::gltf

@@ -1,0 +1,128 @@
+// The glTF loader's materials (the table of docs/design.md §3), textures and
+// KHR_lights_punctual lights (gltf_loader.h).
+#include "scene/gltf_loader.h"
+
+#include <cmath>
+
+namespace rs::gltf {
+
+namespace {
+
+float srgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+double extNumber(const tinygltf::ExtensionMap& ext, const char* extension, const char* key,
+                 double fallback) {
+    auto it = ext.find(extension);
+    if (it == ext.end() || !it->second.Has(key)) return fallback;
+    const tinygltf::Value& v = it->second.Get(key);
+    return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+}
+
+}  // namespace
+
+void GltfLoader::loadMaterials() {
+    for (size_t i = 0; i < model_.materials.size(); ++i) {
+        const tinygltf::Material& m = model_.materials[i];
+        const auto& pbr = m.pbrMetallicRoughness;
+        Material out;
+        out.name = m.name.empty() ? "material " + std::to_string(i) : m.name;
+        std::string where = quoted("material", int(i), m.name);
+        for (int c = 0; c < 3; ++c) out.baseColor[c] = float(pbr.baseColorFactor.at(c));
+        out.metallic = std::clamp(float(pbr.metallicFactor), 0.f, 1.f);
+        out.roughness = std::clamp(float(pbr.roughnessFactor), 0.f, 1.f);
+        float strength = float(extNumber(m.extensions, "KHR_materials_emissive_strength", "emissiveStrength", 1.0));
+        for (int c = 0; c < 3; ++c) out.emission[c] = float(m.emissiveFactor.at(c)) * strength;
+        float transmission = float(extNumber(m.extensions, "KHR_materials_transmission", "transmissionFactor", 0.0));
+        out.ior = float(extNumber(m.extensions, "KHR_materials_ior", "ior", 1.5));
+        if (!isFinite(out.baseColor) || !isFinite(out.emission) || !std::isfinite(out.metallic) ||
+            !std::isfinite(out.roughness) || !(out.ior >= 1.0f && out.ior < 10.f))
+            fail(where + " has a non-finite or out-of-range factor");
+        if (glm::any(glm::lessThan(out.emission, Vec3(0.f)))) fail(where + " has negative emission");
+        if (pbr.baseColorTexture.index >= 0)
+            out.baseColorTexture = loadTexture(pbr.baseColorTexture.index, where);
+        if (m.emissiveTexture.index >= 0)
+            reporter_.warn(path_ + ": " + where + ": emissiveTexture is ignored (emissiveFactor used)");
+
+        if (transmission > 0.f) {
+            if (transmission < 1.f)
+                reporter_.warn(path_ + ": " + where + ": transmission " + std::to_string(transmission) +
+                               " treated as " + (transmission >= 0.5f ? "1" : "0"));
+        }
+        if (transmission >= 0.5f) out.kind = MaterialKind::Glass;
+        else if (out.metallic >= 1.f) out.kind = out.roughness < 0.05f ? MaterialKind::Mirror : MaterialKind::Glossy;
+        else if (out.metallic <= 0.f && out.roughness >= 1.f) out.kind = MaterialKind::Lambert;
+        else out.kind = MaterialKind::Mix;
+        scene_.materials.push_back(out);
+    }
+    // Primitives without a material use glTF's default: white-ish, metallic 1, roughness 1
+    // per the spec's factor defaults; a renderer user expects a grey diffuse instead.
+    defaultMaterial_ = uint32_t(scene_.materials.size());
+    Material fallback;
+    fallback.name = "default";
+    scene_.materials.push_back(fallback);
+}
+
+int GltfLoader::loadTexture(int textureIndex, const std::string& where) {
+    if (textureIndex >= int(model_.textures.size()))
+        fail(where + ": texture " + std::to_string(textureIndex) + " does not exist");
+    int source = model_.textures[textureIndex].source;
+    if (source < 0 || source >= int(model_.images.size()))
+        fail(quoted("texture", textureIndex, model_.textures[textureIndex].name) + " has no valid image source");
+    auto cached = textureOfImage_.find(source);
+    if (cached != textureOfImage_.end()) return cached->second;
+
+    const tinygltf::Image& img = model_.images[source];
+    std::string iwhere = quoted("image", source, img.name.empty() ? img.uri : img.name);
+    if (img.width <= 0 || img.height <= 0 || img.image.empty()) fail(iwhere + " has zero size");
+    int bytesPer = img.bits / 8;
+    if ((img.bits != 8 && img.bits != 16) || img.component < 1 || img.component > 4 ||
+        img.image.size() < size_t(img.width) * img.height * img.component * bytesPer)
+        fail(iwhere + " has an unsupported pixel format");
+    Texture tex;
+    tex.name = iwhere;
+    tex.width = img.width;
+    tex.height = img.height;
+    tex.texels.resize(size_t(img.width) * img.height);
+    float maxValue = img.bits == 8 ? 255.f : 65535.f;
+    for (size_t p = 0; p < tex.texels.size(); ++p) {
+        float ch[4];
+        for (int c = 0; c < img.component; ++c) {
+            size_t at = (p * img.component + c) * bytesPer;
+            unsigned v = bytesPer == 1 ? img.image[at] : unsigned(img.image[at] | (img.image[at + 1] << 8));
+            ch[c] = float(v) / maxValue;
+        }
+        Vec3 rgb = img.component >= 3 ? Vec3(ch[0], ch[1], ch[2]) : Vec3(ch[0]);
+        tex.texels[p] = Vec3(srgbToLinear(rgb.x), srgbToLinear(rgb.y), srgbToLinear(rgb.z));
+    }
+    int index = int(scene_.textures.size());
+    scene_.textures.push_back(std::move(tex));
+    textureOfImage_[source] = index;
+    return index;
+}
+
+void GltfLoader::loadLights() {
+    for (size_t i = 0; i < model_.lights.size(); ++i) {
+        const tinygltf::Light& l = model_.lights[i];
+        std::string where = quoted("light", int(i), l.name);
+        PunctualLight out;
+        out.name = l.name.empty() ? "light " + std::to_string(i) : l.name;
+        Vec3 color(1.f);
+        if (l.color.size() == 3) color = Vec3(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+        out.intensity = color * float(l.intensity);
+        if (!isFinite(out.intensity) || glm::any(glm::lessThan(out.intensity, Vec3(0.f))))
+            fail(where + " has a non-finite or negative intensity");
+        if (l.type == "point") out.type = LightType::Point;
+        else if (l.type == "spot") {
+            out.type = LightType::Spot;
+            out.cosInner = std::cos(float(l.spot.innerConeAngle));
+            out.cosOuter = std::cos(float(l.spot.outerConeAngle));
+            if (!(out.cosInner > out.cosOuter)) fail(where + ": spot innerConeAngle must be below outerConeAngle");
+        } else if (l.type == "directional") out.type = LightType::Directional;
+        else fail(where + " has unknown type '" + l.type + "'");
+        lightTemplates_.push_back(out);
+    }
+}
+
+}  // namespace rs::gltf
