@@ -91,37 +91,22 @@ void reducePass(const Pass& pass, const std::vector<uint32_t>& pixels, Occlusion
     }
 }
 
-}  // namespace
+// -- Planning: the triangles' index lists, the driver's limits, the passes ------------------
 
-OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Reporter& reporter,
-                          VoxelizeTimings* timings) {
-    checkGridSize(geometry);
-    VoxelizeTimings time;
-    Timer setupTimer;
-    GpuContext context;  // declared first: GL objects below are deleted while it is current
-    GlProgram program(compileProgram({"glsl/voxelize.vert", "glsl/voxelize.frag"}));
-    time.setup = setupTimer.seconds();
-    Timer uploadTimer;
-    OcclusionGrid grid(geometry);
-    const IVec3 dims = geometry.dims;
-
-    // -- Upload the triangles once: voxel-space positions and per-axis planes.
-    const VoxelTriangles tris = prepareVoxelTriangles(scene, geometry);
-    GlObjects gl;
-    const size_t triCount = tris.count();
-    glCreateVertexArrays(1, &gl.vao);
-    glCreateBuffers(1, &gl.vertices);
-    glCreateBuffers(1, &gl.planes);
-    glCreateBuffers(1, &gl.slices);
-    glCreateBuffers(1, &gl.indices);
-    // Index lists: for each axis and interval the triangles whose slice range meets it, in
-    // triangle order (so that a batch of triangles is a contiguous part of each list).
+// For each axis and interval of kMaxSlicesPerPass slices, the triangles whose slice range meets
+// it, in triangle order (so that a batch of triangles is a contiguous part of each list), as
+// one index array: list (axis a, interval i) is [start[a][i], start[a][i + 1]).
+struct TriangleLists {
     std::vector<uint32_t> indices;
-    std::vector<std::vector<size_t>> listStart(3);  // [axis][interval], one past the last too
+    std::vector<std::vector<size_t>> start{3};
+};
+
+TriangleLists listTriangles(const VoxelTriangles& tris, const IVec3& dims) {
+    TriangleLists out;
     for (int a = 0; a < 3; ++a) {
         const int intervals = (dims[a] + kMaxSlicesPerPass - 1) / kMaxSlicesPerPass;
         std::vector<std::vector<uint32_t>> lists(static_cast<size_t>(intervals));
-        for (size_t t = 0; t < triCount; ++t) {
+        for (size_t t = 0; t < tris.count(); ++t) {
             if (tris.planes[3 * t + a].w == 0) continue;  // parallel to a: no projected area
             const IVec2 r = tris.slices[3 * t + a];
             const int first = std::max(r.x, 0) / kMaxSlicesPerPass;
@@ -130,45 +115,65 @@ OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Repo
                 for (uint32_t k = 0; k < 3; ++k) lists[size_t(i)].push_back(uint32_t(3 * t) + k);
         }
         for (const auto& list : lists) {
-            listStart[size_t(a)].push_back(indices.size());
-            indices.insert(indices.end(), list.begin(), list.end());
+            out.start[size_t(a)].push_back(out.indices.size());
+            out.indices.insert(out.indices.end(), list.begin(), list.end());
         }
-        listStart[size_t(a)].push_back(indices.size());
+        out.start[size_t(a)].push_back(out.indices.size());
     }
-    if (triCount) {
+    return out;
+}
+
+// Vertices, planes, slice ranges and index lists into GL buffers, bound to one VAO.
+void uploadTriangles(const VoxelTriangles& tris, const TriangleLists& lists, GlObjects& gl) {
+    glCreateVertexArrays(1, &gl.vao);
+    glCreateBuffers(1, &gl.vertices);
+    glCreateBuffers(1, &gl.planes);
+    glCreateBuffers(1, &gl.slices);
+    glCreateBuffers(1, &gl.indices);
+    if (tris.count()) {
         glNamedBufferStorage(gl.vertices, GLsizeiptr(tris.positions.size() * sizeof(Vec3)), tris.positions.data(), 0);
         glNamedBufferStorage(gl.planes, GLsizeiptr(tris.planes.size() * sizeof(Vec4)), tris.planes.data(), 0);
         glNamedBufferStorage(gl.slices, GLsizeiptr(tris.slices.size() * sizeof(IVec2)), tris.slices.data(), 0);
     }
-    if (!indices.empty())
-        glNamedBufferStorage(gl.indices, GLsizeiptr(indices.size() * sizeof(uint32_t)), indices.data(), 0);
+    if (!lists.indices.empty())
+        glNamedBufferStorage(gl.indices, GLsizeiptr(lists.indices.size() * sizeof(uint32_t)), lists.indices.data(), 0);
     glVertexArrayElementBuffer(gl.vao, gl.indices);
     glVertexArrayVertexBuffer(gl.vao, 0, gl.vertices, 0, sizeof(Vec3));
     glVertexArrayAttribFormat(gl.vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
     glVertexArrayAttribBinding(gl.vao, 0, 0);
     glEnableVertexArrayAttrib(gl.vao, 0);
+}
 
-    // A storage block may be smaller than the scene's planes (the GL minimum is 128 MiB,
-    // 2.8 M triangles): draw in batches whose offsets meet the binding alignment.
-    GLint maxBlock = 0, blockAlign = 1, maxTexture = 0, maxViewport[2] = {0, 0};
-    GLint viewportBounds[2] = {0, 0};
-    glGetIntegerv(GL_VIEWPORT_BOUNDS_RANGE, viewportBounds);
-    glGetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBlock);
-    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &blockAlign);
-    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxTexture);
-    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, maxViewport);
-    const size_t bytesPerTri = 3 * sizeof(Vec4);  // the larger of the two storage buffers
-    size_t batch = std::max<size_t>(1, size_t(std::max(maxBlock, 1 << 20)) / bytesPerTri);
-    batch -= batch % size_t(std::max(blockAlign, 1));  // batch·48 is then a multiple of the alignment
-    batch = std::max<size_t>(batch, size_t(std::max(blockAlign, 1)));
+struct DriverLimits {
+    GLint viewportBounds[2] = {0, 0}, maxViewport[2] = {0, 0}, maxTexture = 0;
+    size_t batch = 1;  // triangles a draw: the storage blocks of one batch fit the driver's limit
 
-    // -- Tiles: the viewport is 4× the grid's in-plane dims, cut where the driver requires.
-    const int tilePixels = floorPowerOfTwo(std::min({kMaxTilePixels, maxTexture, maxViewport[0], maxViewport[1]}));
+    DriverLimits() {
+        GLint maxBlock = 0, blockAlign = 1;
+        glGetIntegerv(GL_VIEWPORT_BOUNDS_RANGE, viewportBounds);
+        glGetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxBlock);
+        glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &blockAlign);
+        glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxTexture);
+        glGetIntegerv(GL_MAX_VIEWPORT_DIMS, maxViewport);
+        // A storage block may be smaller than the scene's planes (the GL minimum is 128 MiB,
+        // 2.8 M triangles): draw in batches whose offsets meet the binding alignment.
+        const size_t bytesPerTri = 3 * sizeof(Vec4);  // the larger of the two storage buffers
+        batch = std::max<size_t>(1, size_t(std::max(maxBlock, 1 << 20)) / bytesPerTri);
+        batch -= batch % size_t(std::max(blockAlign, 1));  // batch·48 is then a multiple of the alignment
+        batch = std::max<size_t>(batch, size_t(std::max(blockAlign, 1)));
+    }
+};
+
+// One pass per (axis, interval, tile): the viewport is 4× the grid's in-plane dims, cut into
+// tiles where the driver requires. texSize: the largest tile, the attachment's size.
+std::vector<Pass> planPasses(const IVec3& dims, const DriverLimits& limits, IVec2& texSize) {
+    const int tilePixels = floorPowerOfTwo(
+        std::min({kMaxTilePixels, int(limits.maxTexture), int(limits.maxViewport[0]), int(limits.maxViewport[1])}));
     if (tilePixels < kSubsamplesPerAxis)
         throw Error(ErrorKind::Gpu, "the GL driver's viewport or texture limit is below 4 pixels");
     const int tileVoxels = tilePixels / kSubsamplesPerAxis;
     std::vector<Pass> passes;
-    int texWidth = 0, texHeight = 0;
+    texSize = IVec2(0);
     for (int a = 0; a < 3; ++a) {
         const int u = (a + 1) % 3, v = (a + 2) % 3;
         for (int s = 0; s < dims[a]; s += kMaxSlicesPerPass)
@@ -177,19 +182,24 @@ OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Repo
                     Pass p{a, s, std::min(kMaxSlicesPerPass, dims[a] - s), IVec3(tu, tv, 0),
                            std::min(tileVoxels, dims[u] - tu) * kSubsamplesPerAxis,
                            std::min(tileVoxels, dims[v] - tv) * kSubsamplesPerAxis};
-                    texWidth = std::max(texWidth, p.tileWidth);
-                    texHeight = std::max(texHeight, p.tileHeight);
+                    texSize = glm::max(texSize, IVec2(p.tileWidth, p.tileHeight));
                     passes.push_back(p);
                 }
     }
+    return passes;
+}
+
+// -- Passes: the attachment, the fixed state, one draw per pass ------------------------------
+
+// An RGBA32UI attachment of texSize, bound, and the state every pass shares: every fragment
+// counts, OR accumulates the slice bits.
+void setUpTarget(GlObjects& gl, const GlProgram& program, IVec2 texSize) {
     glCreateTextures(GL_TEXTURE_2D, 1, &gl.texture);
-    glTextureStorage2D(gl.texture, 1, GL_RGBA32UI, texWidth, texHeight);
+    glTextureStorage2D(gl.texture, 1, GL_RGBA32UI, texSize.x, texSize.y);
     glCreateFramebuffers(1, &gl.framebuffer);
     glNamedFramebufferTexture(gl.framebuffer, GL_COLOR_ATTACHMENT0, gl.texture, 0);
     if (glCheckNamedFramebufferStatus(gl.framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw Error(ErrorKind::Gpu, "the voxelizer's RGBA32UI framebuffer is incomplete");
-
-    // -- Fixed state: every fragment counts, OR accumulates the slice bits.
     glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer);
     glUseProgram(program.id());
     glBindVertexArray(gl.vao);
@@ -200,60 +210,92 @@ OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Repo
     glEnable(GL_COLOR_LOGIC_OP);
     glLogicOp(GL_OR);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    const GLint uAxisVs = program.uniform("uAxis");
-    const GLint uTileOrigin = program.uniform("uTileOrigin");
-    const GLint uPixelOffset = program.uniform("uPixelOffset");
-    const GLint uViewportSize = program.uniform("uViewportSize");
-    const GLint uDepthRange = program.uniform("uDepthRange");
-    const GLint uIntervalStart = program.uniform("uIntervalStart");
-    const GLint uSliceCount = program.uniform("uSliceCount");
-    const GLint uFirstTriangle = program.uniform("uFirstTriangle");
+}
+
+struct PassUniforms {
+    GLint axis, tileOrigin, pixelOffset, viewportSize, depthRange, intervalStart, sliceCount, firstTriangle;
+    explicit PassUniforms(const GlProgram& p)
+        : axis(p.uniform("uAxis")), tileOrigin(p.uniform("uTileOrigin")), pixelOffset(p.uniform("uPixelOffset")),
+          viewportSize(p.uniform("uViewportSize")), depthRange(p.uniform("uDepthRange")),
+          intervalStart(p.uniform("uIntervalStart")), sliceCount(p.uniform("uSliceCount")),
+          firstTriangle(p.uniform("uFirstTriangle")) {}
+};
+
+// Rasterizes one pass into the cleared attachment: the viewport spans the whole image, offset
+// so that the tile lands on the attachment (or the tile alone where the driver cannot), and
+// the pass's triangles are drawn batch by batch.
+void drawPass(const Pass& pass, const IVec3& dims, const DriverLimits& limits, const PassUniforms& u,
+              const TriangleLists& lists, size_t triCount, const GlObjects& gl) {
+    const int tileX = pass.tileVoxel.x * kSubsamplesPerAxis, tileY = pass.tileVoxel.y * kSubsamplesPerAxis;
+    int viewportW = ceilPowerOfTwo(dims[(pass.axis + 1) % 3] * kSubsamplesPerAxis);
+    int viewportH = ceilPowerOfTwo(dims[(pass.axis + 2) % 3] * kSubsamplesPerAxis);
+    const bool whole = viewportW <= limits.maxViewport[0] && viewportH <= limits.maxViewport[1] &&
+                       -std::max(tileX, tileY) >= limits.viewportBounds[0];
+    if (!whole) {
+        viewportW = ceilPowerOfTwo(pass.tileWidth);
+        viewportH = ceilPowerOfTwo(pass.tileHeight);
+    }
+    glViewport(whole ? -tileX : 0, whole ? -tileY : 0, viewportW, viewportH);
+    glUniform2f(u.pixelOffset, whole ? 0.f : float(tileX), whole ? 0.f : float(tileY));
+    glUniform1i(u.axis, pass.axis);
+    glUniform2f(u.tileOrigin, float(tileX), float(tileY));
+    glUniform2f(u.viewportSize, float(viewportW), float(viewportH));
+    glUniform2f(u.depthRange, float(pass.sliceStart), float(pass.sliceStart + pass.sliceCount));
+    glUniform1i(u.intervalStart, pass.sliceStart);
+    glUniform1i(u.sliceCount, pass.sliceCount);
+    const GLuint zero[4] = {0, 0, 0, 0};
+    glClearBufferuiv(GL_COLOR, 0, zero);
+    const size_t interval = size_t(pass.sliceStart / kMaxSlicesPerPass);
+    const uint32_t* listBegin = lists.indices.data() + lists.start[size_t(pass.axis)][interval];
+    const uint32_t* listEnd = lists.indices.data() + lists.start[size_t(pass.axis)][interval + 1];
+    for (size_t first = 0; first < triCount && listBegin != listEnd; first += limits.batch) {
+        const size_t count = std::min(limits.batch, triCount - first);
+        const uint32_t* from = std::lower_bound(listBegin, listEnd, uint32_t(3 * first));
+        const uint32_t* to = std::lower_bound(from, listEnd, uint32_t(3 * (first + count)));
+        if (from == to) continue;
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, gl.planes, GLintptr(first * 3 * sizeof(Vec4)),
+                          GLsizeiptr(count * 3 * sizeof(Vec4)));
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, gl.slices, GLintptr(first * 3 * sizeof(IVec2)),
+                          GLsizeiptr(count * 3 * sizeof(IVec2)));
+        glUniform1ui(u.firstTriangle, GLuint(first));
+        glDrawElements(GL_TRIANGLES, GLsizei(to - from), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>((from - lists.indices.data()) * sizeof(uint32_t)));
+    }
+    glFinish();
+}
+
+}  // namespace
+
+// Plan (upload, limits, passes), then per pass draw, read back and reduce into the counts.
+OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Reporter& reporter,
+                          VoxelizeTimings* timings) {
+    checkGridSize(geometry);
+    VoxelizeTimings time;
+    Timer setupTimer;
+    GpuContext context;  // declared first: GL objects below are deleted while it is current
+    GlProgram program(compileProgram({"glsl/voxelize.vert", "glsl/voxelize.frag"}));
+    time.setup = setupTimer.seconds();
+
+    Timer uploadTimer;
+    OcclusionGrid grid(geometry);
+    const VoxelTriangles tris = prepareVoxelTriangles(scene, geometry);
+    const TriangleLists lists = listTriangles(tris, geometry.dims);
+    GlObjects gl;
+    uploadTriangles(tris, lists, gl);
+    const DriverLimits limits;
+    IVec2 texSize;
+    const std::vector<Pass> passes = planPasses(geometry.dims, limits, texSize);
+    setUpTarget(gl, program, texSize);
+    const PassUniforms uniforms(program);
     glFinish();
     context.check("voxelizer upload");
     time.upload = uploadTimer.seconds();
 
-    // -- One draw per (axis, interval, tile), read back, reduce.
     reporter.begin("voxelizing (gpu)", int64_t(passes.size()), "passes");
-    std::vector<uint32_t> pixels(size_t(texWidth) * texHeight * 4);
+    std::vector<uint32_t> pixels(size_t(texSize.x) * size_t(texSize.y) * 4);
     for (const Pass& pass : passes) {
         Timer rasterTimer;
-        // The viewport spans the whole image, offset so that the tile lands on the attachment.
-        const int tileX = pass.tileVoxel.x * kSubsamplesPerAxis, tileY = pass.tileVoxel.y * kSubsamplesPerAxis;
-        int viewportW = ceilPowerOfTwo(dims[(pass.axis + 1) % 3] * kSubsamplesPerAxis);
-        int viewportH = ceilPowerOfTwo(dims[(pass.axis + 2) % 3] * kSubsamplesPerAxis);
-        const bool whole = viewportW <= maxViewport[0] && viewportH <= maxViewport[1] &&
-                           -std::max(tileX, tileY) >= viewportBounds[0];
-        if (!whole) {
-            viewportW = ceilPowerOfTwo(pass.tileWidth);
-            viewportH = ceilPowerOfTwo(pass.tileHeight);
-        }
-        glViewport(whole ? -tileX : 0, whole ? -tileY : 0, viewportW, viewportH);
-        glUniform2f(uPixelOffset, whole ? 0.f : float(tileX), whole ? 0.f : float(tileY));
-        glUniform1i(uAxisVs, pass.axis);
-        glUniform2f(uTileOrigin, float(tileX), float(tileY));
-        glUniform2f(uViewportSize, float(viewportW), float(viewportH));
-        glUniform2f(uDepthRange, float(pass.sliceStart), float(pass.sliceStart + pass.sliceCount));
-        glUniform1i(uIntervalStart, pass.sliceStart);
-        glUniform1i(uSliceCount, pass.sliceCount);
-        const GLuint zero[4] = {0, 0, 0, 0};
-        glClearBufferuiv(GL_COLOR, 0, zero);
-        const size_t interval = size_t(pass.sliceStart / kMaxSlicesPerPass);
-        const uint32_t* listBegin = indices.data() + listStart[size_t(pass.axis)][interval];
-        const uint32_t* listEnd = indices.data() + listStart[size_t(pass.axis)][interval + 1];
-        for (size_t first = 0; first < triCount && listBegin != listEnd; first += batch) {
-            const size_t count = std::min(batch, triCount - first);
-            const uint32_t* from = std::lower_bound(listBegin, listEnd, uint32_t(3 * first));
-            const uint32_t* to = std::lower_bound(from, listEnd, uint32_t(3 * (first + count)));
-            if (from == to) continue;
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, gl.planes, GLintptr(first * 3 * sizeof(Vec4)),
-                              GLsizeiptr(count * 3 * sizeof(Vec4)));
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, gl.slices, GLintptr(first * 3 * sizeof(IVec2)),
-                              GLsizeiptr(count * 3 * sizeof(IVec2)));
-            glUniform1ui(uFirstTriangle, GLuint(first));
-            glDrawElements(GL_TRIANGLES, GLsizei(to - from), GL_UNSIGNED_INT,
-                           reinterpret_cast<const void*>((from - indices.data()) * sizeof(uint32_t)));
-        }
-        glFinish();
+        drawPass(pass, geometry.dims, limits, uniforms, lists, tris.count(), gl);
         time.raster += rasterTimer.seconds();
 
         Timer readTimer;
