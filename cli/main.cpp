@@ -163,7 +163,7 @@ float parseFloat(const std::string& flag, const std::string& s) {
 }
 
 // "a,b,c" → three numbers.
-void parseTriple(const std::string& flag, const std::string& s, float out[3]) {
+void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out) {
     float v[3];
     size_t start = 0;
     for (int i = 0; i < 3; ++i) {

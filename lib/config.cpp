@@ -32,9 +32,10 @@ DirectMethod parseDirectMethod(const std::string& name) {
     throw Error(ErrorKind::Config, "--direct " + name + ": unknown method (sample, photons)");
 }
 
-void RenderConfig::photonSplit(float out[3]) const {
-    for (int c = 0; c < 3; ++c) out[c] = split[c];
+ClassTriple RenderConfig::photonSplit() const {
+    ClassTriple out = split;
     if (!splitSet && directBySampling()) out[0] = 0.f;
+    return out;
 }
 
 static void requireRange(const char* flag, double v, double lo, double hi) {
@@ -63,8 +64,7 @@ void RenderConfig::validate() const {
     if (splitSet && directBySampling() && split[0] > 0.f)
         throw Error(ErrorKind::Config, "--split gives direct photons a share, but --direct sample (the default) computes "
                                        "direct light by light sampling: use --split 0,I,C or --direct photons");
-    float used[3];
-    photonSplit(used);
+    const ClassTriple used = photonSplit();
     if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
     requireRange("--light-samples", lightSamples, 1, 4096);
     requireRange("--passes", passes, 0, 1 << 20);
@@ -109,7 +109,7 @@ void RenderConfig::resolution(float aspect, int& w, int& h) const {
         throw Error(ErrorKind::Config, "resolution " + std::to_string(w) + "x" + std::to_string(h) + " from the camera's aspect is too large");
 }
 
-static std::string triple(const float v[3]) {
+static std::string triple(const ClassTriple& v) {
     char b[96];
     std::snprintf(b, sizeof b, "%g,%g,%g", v[0], v[1], v[2]);
     return b;
@@ -126,8 +126,7 @@ ImageAttributes RenderConfig::attributes() const {
             {"grid", std::to_string(grid)},
             {"voxelizer", voxelizer}};
     if (splats()) {
-        float used[3];
-        photonSplit(used);
+        const ClassTriple used = photonSplit();
         a["direct"] = directMethodName(direct);
         if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
         a["alpha"] = std::to_string(alpha);

@@ -6,6 +6,8 @@
 #include <string>
 
 #include "output/film.h"
+#include "splat/eye.h"
+#include "splat/photons.h"
 
 namespace rs {
 
@@ -33,7 +35,7 @@ struct RenderConfig {
     int width = 500;   // 0: from height and the camera's aspect
     int height = 0;    // 0: from width and the camera's aspect
     int spp = 0;       // samples per pixel; 0: the method's default (splat 4, path 16)
-    int maxDepth = 32;
+    int maxDepth = kDefaultMaxDepth;
     uint64_t seed = 0;
     int threads = 0;         // 0: all hardware threads
     // Passes (splat: each a new eye pass and new photons, kernels shrinking from pass to
@@ -55,19 +57,15 @@ struct RenderConfig {
     // with 1, 0.0029 with 2, 0.00084 with 4, 0.00044 with 8, at the same total time; at 500 px
     // 8 samples cost 1.05 s of eye pass against 0.25 s for 1 (a pass takes about 17 s).
     int lightSamples = 8;
-    int64_t photons = 100000;
+    // Defaults and the measurements behind them: PhotonSettings.
+    int64_t photons = PhotonSettings{}.photons;
     // The split as given; photonSplit() is what the render uses: unless set, direct light by
     // sampling traces no direct photons (the paper's 0.5 : 0.3 for the others).
-    float split[3] = {0.2f, 0.5f, 0.3f};
+    ClassTriple split = PhotonSettings{}.split;
     bool splitSet = false;
-    // Measured on the Cornell box at 200 px against a 1024-spp path-traced reference: indirect
-    // k = 64 / max 48 voxels gave rel. MSE 0.024 in 24 s of splatting, k = 32 / max 24 gave
-    // 0.030 in 12 s, k = 16 / max 16 gave 0.037 in 7 s; the middle is the default.
-    float kernelPhotons[3] = {16.f, 32.f, 16.f};
-    // Indirect photons leaving a glossy lobe get a sharp pdf, hence tiny radii and sparkles: a
-    // 6-voxel floor halved the error on both boxes (glossy 0.084 → 0.042, Cornell 0.030 → 0.018).
-    float minRadius[3] = {1.f, 6.f, 1.f};
-    float maxRadius[3] = {16.f, 24.f, 16.f};
+    ClassTriple kernelPhotons = PhotonSettings{}.k;
+    ClassTriple minRadius = PhotonSettings{}.minRadius;
+    ClassTriple maxRadius = PhotonSettings{}.maxRadius;
 
     // Occlusion grid (docs/design.md §5–6).
     int grid = 192;                  // voxels along the scene's longest axis, 1..4096
@@ -75,10 +73,10 @@ struct RenderConfig {
     std::string vdb;                 // optional: write the grid used as .vdb
     std::string cacheDir;            // optional: voxel cache directory (<key>.vdb files)
 
-    int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? 16 : 4; }
+    int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? 16 : EyePassSettings{}.spp; }
     int passCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }
     bool directBySampling() const { return direct == DirectMethod::Sample; }
-    void photonSplit(float out[3]) const;
+    ClassTriple photonSplit() const;
     bool splats() const { return method != Method::Path; }
     void validate() const;
     // The grid settings only (validate() includes them): for commands without an image.

@@ -84,12 +84,10 @@ Film renderPath(const Scene& scene, const RayAccel& accel, const LightSampler& l
 PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
     PhotonSettings ps;
     ps.photons = cfg.photons;
-    cfg.photonSplit(ps.split);
-    for (int c = 0; c < kPhotonClassCount; ++c) {
-        ps.k[c] = cfg.kernelPhotons[c];
-        ps.minRadius[c] = cfg.minRadius[c];
-        ps.maxRadius[c] = cfg.maxRadius[c];
-    }
+    ps.split = cfg.photonSplit();
+    ps.k = cfg.kernelPhotons;
+    ps.minRadius = cfg.minRadius;
+    ps.maxRadius = cfg.maxRadius;
     ps.voxelSize = voxelSize;
     ps.maxDepth = cfg.maxDepth;
     ps.seed = cfg.seed;

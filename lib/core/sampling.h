@@ -16,6 +16,10 @@ inline uint64_t mix64(uint64_t z) {  // splitmix64 finaliser
     return z ^ (z >> 31);
 }
 
+// The longest path any stage follows unless told otherwise: segments of a photon path or a
+// path-traced path, specular bounces of an eye ray's chain.
+constexpr int kDefaultMaxDepth = 32;
+
 // The stream index of sample `index` (< 2^24 a pixel) of pixel `pixel`, for Sampler and hashKey.
 constexpr int kSampleIndexBits = 24;
 inline uint64_t pixelSampleKey(uint32_t pixel, uint64_t index) { return (uint64_t(pixel) << kSampleIndexBits) ^ index; }

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <vector>
 
+#include "core/sampling.h"
 #include "output/film.h"
 #include "core/math.h"
 
@@ -100,7 +101,7 @@ struct EyePassSettings {
     int width = 500, height = 500;
     int spp = 4;              // S: stratified camera samples a pixel (paper: 500×500×4)
     int firstSample = 0;      // this pass's samples are [firstSample, firstSample + S) of each pixel's sequence
-    int maxSpecularDepth = 16;  // longest specular chain followed
+    int maxSpecularDepth = kDefaultMaxDepth;  // longest specular chain followed
     int directSamples = 0;    // > 0: direct light at every eye sample, by that many light samples
     uint64_t seed = 0;
 };
