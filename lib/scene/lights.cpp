@@ -21,12 +21,7 @@ LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
     }
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PunctualLight& l = scene.lights[i];
-        float I = luminance(l.intensity), power = 0.f;
-        switch (l.type) {
-            case LightType::Point: power = 4.f * kPi * I; break;
-            case LightType::Spot: power = 2.f * kPi * I * ((1.f - l.cosInner) + (l.cosInner - l.cosOuter) / 3.f); break;
-            case LightType::Directional: power = kPi * sqr(sceneRadius_) * I; break;
-        }
+        const float power = l.power(luminance(l.intensity), sceneRadius_);
         if (power > 0.f) entries_.push_back({false, uint32_t(i), power});
     }
     double total = 0.0;

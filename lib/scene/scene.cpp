@@ -85,17 +85,7 @@ Vec3 Scene::emittedPower() const {
     Vec3 total(0.f);
     for (size_t t = 0; t < triangleCount(); ++t)
         total += materials[triMaterial[t]].emission * kPi * triangleArea(t);
-    float r = 0.5f * bounds.diagonal();
-    for (const PunctualLight& l : lights) {
-        switch (l.type) {
-            case LightType::Point: total += 4.f * kPi * l.intensity; break;
-            case LightType::Spot:
-                // ∫ over the cone with the smooth falloff: full inside, quadratic ramp outside.
-                total += 2.f * kPi * l.intensity * ((1.f - l.cosInner) + (l.cosInner - l.cosOuter) / 3.f);
-                break;
-            case LightType::Directional: total += l.intensity * kPi * r * r; break;
-        }
-    }
+    for (const PunctualLight& l : lights) total += l.power(l.intensity, 0.5f * bounds.diagonal());
     return total;
 }
 

@@ -49,6 +49,18 @@ struct PunctualLight {
 
     // Intensity towards direction `w` (unit, away from the light); glTF's smooth cone falloff.
     Vec3 intensityTowards(const Vec3& w) const;
+    // The power it emits, for an intensity I given as a colour or as its luminance: 4πI (point);
+    // over the cone with the smooth falloff, full inside and a quadratic ramp outside (spot);
+    // through a disc of the scene's bounding radius (directional).
+    template <class T>
+    T power(const T& I, float sceneRadius) const {
+        switch (type) {
+            case LightType::Point: return 4.f * kPi * I;
+            case LightType::Spot: return 2.f * kPi * I * ((1.f - cosInner) + (cosInner - cosOuter) / 3.f);
+            case LightType::Directional: return kPi * sqr(sceneRadius) * I;
+        }
+        return T(0.f);
+    }
 };
 
 struct Camera {
