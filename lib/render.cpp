@@ -30,55 +30,34 @@ const char* versionString() { return RAYSPLAT_VERSION; }
 
 namespace {
 
-constexpr double kMB = 1024.0 * 1024.0;
-
 // Progressive rendering: cfg.passCount() passes, or with a time limit as many as fit (at least
 // one), averaged with equal weights. Each pass reports as one unit of the "rendering"
 // progress when there is more than one.
-template <class RenderPass>
-Film renderPasses(const RenderConfig& cfg, int width, int height, Reporter& reporter, Stats& stats, RenderPass&& pass) {
-    Timer t;
-    Film sum(width, height);
-    const bool timed = cfg.timeLimit > 0.0;
-    const int wanted = cfg.passCount();
-    const bool several = timed || wanted > 1;
-    if (several) reporter.begin("rendering", timed ? 0 : wanted, "passes");
-    int passes = 0;
-    double longest = 0.0;
-    for (;;) {
-        Timer one;
-        sum.add(pass(passes));
-        ++passes;
-        longest = std::max(longest, one.seconds());
-        if (several) reporter.advance(1);
-        if (timed ? t.seconds() + longest > cfg.timeLimit : passes >= wanted) break;
-    }
-    if (several) reporter.end();
-    sum.scale(1.f / float(passes));
-    stats.setCount("passes", passes);
-    return sum;
-}
+// What every stage of a render is handed: the scene and what was built from it, the image
+// size, the settings, and where work, progress and figures go.
+struct RenderContext {
+    const Scene& scene;
+    const RayAccel& accel;
+    const LightSampler& lights;
+    const Camera& camera;
+    int width, height;
+    const RenderConfig& cfg;
+    ThreadPool& pool;
+    Reporter& reporter;
+    Stats& stats;
+};
 
-// The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …
-float passRadiusScale(int p, float alpha) {
-    double r2 = 1.0;
-    for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
-    return float(std::sqrt(r2));
-}
+// -- The stages' settings, from the RenderConfig (here only) ----------------------------------
 
-Film renderPath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
-                int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats) {
-    const int spp = cfg.samplesPerPixel();
-    int passes = 0;
-    Timer t;
-    Film film = renderPasses(cfg, width, height, reporter, stats, [&](int pass) {
-        passes = pass + 1;
-        return renderPathPass(scene, accel, lights, camera, width, height, cfg, {pass * spp, spp}, pool, reporter);
-    });
-    stats.addTime("render", t.seconds());
-    stats.setCount("samples_per_pixel", double(passes) * spp);
-    stats.setCount("paths_per_second", double(width) * height * passes * spp / std::max(t.seconds(), 1e-9));
-    return film;
+EyePassSettings eyePassSettings(const RenderContext& c) {
+    EyePassSettings es;
+    es.width = c.width;
+    es.height = c.height;
+    es.spp = c.cfg.samplesPerPixel();
+    es.maxSpecularDepth = c.cfg.maxDepth;
+    es.directSamples = c.cfg.directBySampling() ? c.cfg.lightSamples : 0;
+    es.seed = c.cfg.seed;
+    return es;
 }
 
 PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
@@ -94,85 +73,118 @@ PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
     return ps;
 }
 
-// Counts a pass's tree and splat add to Stats: the last pass's sizes, every pass's work.
+SplatSettings splatSettings(const RenderConfig& cfg) {
+    SplatSettings splat;
+    splat.visibility = cfg.method == Method::Splat;
+    return splat;
+}
+
+// -- Passes -------------------------------------------------------------------------------------
+
+// Progressive rendering: cfg.passCount() passes, or with a time limit as many as fit (at least
+// one), averaged with equal weights. Each pass reports as one unit of the "rendering"
+// progress when there is more than one.
+template <class RenderPass>
+Film renderPasses(const RenderContext& c, RenderPass&& pass) {
+    Timer t;
+    Film sum(c.width, c.height);
+    const bool timed = c.cfg.timeLimit > 0.0;
+    const int wanted = c.cfg.passCount();
+    const bool several = timed || wanted > 1;
+    if (several) c.reporter.begin("rendering", timed ? 0 : wanted, "passes");
+    int passes = 0;
+    double longest = 0.0;
+    for (;;) {
+        Timer one;
+        sum.add(pass(passes));
+        ++passes;
+        longest = std::max(longest, one.seconds());
+        if (several) c.reporter.advance(1);
+        if (timed ? t.seconds() + longest > c.cfg.timeLimit : passes >= wanted) break;
+    }
+    if (several) c.reporter.end();
+    sum.scale(1.f / float(passes));
+    c.stats.setCount("passes", passes);
+    return sum;
+}
+
+// The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …
+float passRadiusScale(int p, float alpha) {
+    double r2 = 1.0;
+    for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
+    return float(std::sqrt(r2));
+}
+
+Film renderPath(const RenderContext& c) {
+    const int spp = c.cfg.samplesPerPixel();
+    int passes = 0;
+    Timer t;
+    Film film = renderPasses(c, [&](int pass) {
+        passes = pass + 1;
+        return renderPathPass(c.scene, c.accel, c.lights, c.camera, c.width, c.height, c.cfg, {pass * spp, spp}, c.pool,
+                              c.reporter);
+    });
+    c.stats.addTime("render", t.seconds());
+    c.stats.setCount("samples_per_pixel", double(passes) * spp);
+    c.stats.setCount("paths_per_second", double(c.width) * c.height * passes * spp / std::max(t.seconds(), 1e-9));
+    return film;
+}
+
+// Figures summed over a render's passes (the last pass's sizes are reported as they come).
 struct SplatTotals {
     SplatStats splat;
     int64_t photonsStored = 0;
-    double photonMb = 0.0, eyeMb = 0.0, treeMb = 0.0;
+    double photonMb = 0.0;
 };
 
-Film renderSplat(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
-                 int width, int height, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter, Stats& stats,
-                 StagedFiles* outputs) {
+Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
+    Stats& stats = c.stats;
     // The occlusion grid, once (docs/design.md §5–6). Without visibility the tree indexes the eye
     // samples over an empty grid: nothing occludes.
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats, outputs);
-    if (cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
-
-    EyePassSettings es;
-    es.width = width;
-    es.height = height;
-    es.spp = cfg.samplesPerPixel();
-    es.maxSpecularDepth = cfg.maxDepth;
-    es.directSamples = cfg.directBySampling() ? cfg.lightSamples : 0;
-    es.seed = cfg.seed;
-    PhotonSettings ps = photonSettings(cfg, grid.geometry.voxelSize);
-    SplatSettings splat;
-    splat.visibility = cfg.method == Method::Splat;
+    OcclusionGrid grid = buildGrid(c.scene, c.cfg, c.pool, c.reporter, stats, outputs);
+    if (c.cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
+    EyePassSettings es = eyePassSettings(c);
+    PhotonSettings ps = photonSettings(c.cfg, grid.geometry.voxelSize);
+    const SplatSettings splat = splatSettings(c.cfg);
     SplatTotals totals;
 
     // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
     // new photons (a fresh range of paths) with shrunk kernels, splatted (docs/design.md §4, §7–9).
-    return renderPasses(cfg, width, height, reporter, stats, [&](int pass) {
+    return renderPasses(c, [&](int pass) {
         Timer t;
         es.firstSample = pass * es.spp;
-        EyePass eye = traceEyePass(scene, accel, &lights, camera, es, pool, reporter);
+        EyePass eye = traceEyePass(c.scene, c.accel, &c.lights, c.camera, es, c.pool, c.reporter);
         stats.addTime("eye", t.seconds());
         stats.setCount("eye_samples", double(eye.samples.size()));
-        stats.setCount("eye_samples_mb", eye.samples.bytes() / kMB);
+        stats.setCount("eye_samples_mb", double(eye.samples.bytes()) / kMB);
 
         t = Timer();
         OcclusionTreeStats ts;
-        OcclusionTree tree = buildOcclusionTree(grid, eye.samples, pool, &ts);
+        OcclusionTree tree = buildOcclusionTree(grid, eye.samples, c.pool, &ts);
         stats.addTime("tree", t.seconds());
-        stats.setCount("tree_nodes", double(ts.nodes));
-        stats.setCount("tree_nodes_empty", double(ts.empty));
-        stats.setCount("tree_nodes_split", double(ts.split));
-        stats.setCount("tree_nodes_occlusion", double(ts.occlusion));
-        stats.setCount("tree_bricks", double(ts.bricks));
-        stats.setCount("tree_brick_voxels", double(ts.brickVoxels));
-        stats.setCount("tree_depth", double(ts.depth));
-        stats.setCount("tree_mb", ts.bytes / kMB);
+        ts.report(stats);
         if (pass == 0 && ts.samplesOutside > 0)
-            reporter.warn(scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
+            c.reporter.warn(c.scene.path + ": " + std::to_string(ts.samplesOutside) +
+                            " eye samples lie outside the grid and get no light");
 
         t = Timer();
         ps.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
-        ps.radiusScale = passRadiusScale(pass, cfg.alpha);
-        PhotonMap photons = tracePhotons(scene, accel, lights, ps, pool, reporter);
+        ps.radiusScale = passRadiusScale(pass, c.cfg.alpha);
+        PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, ps, c.pool, c.reporter);
         stats.addTime("photons", t.seconds());
+        photons.report(stats);
         totals.photonsStored += int64_t(photons.rays.size());
-        totals.photonMb = std::max(totals.photonMb, photons.bytes() / kMB);
-        for (int c = 0; c < kPhotonClassCount; ++c)
-            stats.setCount(std::string("photons_") + photonClassName(c), double(photons.count[c]));
-        stats.setCount("photon_paths", double(photons.pathsTraced));
+        totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
         // The light lands in the eye pass's film: emission, albedo, normal and (sampled)
         // direct light are already there.
         t = Timer();
-        splatPhotons(accel, tree, eye.samples, photons, splat, eye.film, pool, reporter, &totals.splat);
+        splatPhotons(c.accel, tree, eye.samples, photons, splat, eye.film, c.pool, c.reporter, &totals.splat);
         stats.addTime("splat", t.seconds());
         stats.setCount("photon_mb", totals.photonMb);
         stats.setCount("photons_stored", double(totals.photonsStored));
         stats.setCount("radius_scale", ps.radiusScale);
-        stats.setCount("splat_contributions", double(totals.splat.contributions));
-        stats.setCount("traversal_nodes", double(totals.splat.traversal.nodes));
-        stats.setCount("traversal_occluders", double(totals.splat.traversal.occluders));
-        stats.setCount("traversal_samples_reached", double(totals.splat.traversal.samplesReached));
-        stats.setCount("traversal_samples_visited", double(totals.splat.traversal.samplesVisited));
-        stats.setCount("splat_visibility_rays", double(totals.splat.visibilityRays));
-        stats.setCount("splat_refused_behind_origin", double(totals.splat.refused[SegmentReceivers::kBehindOrigin]));
-        stats.setCount("splat_refused_hidden", double(totals.splat.refused[SegmentReceivers::kHidden]));
+        totals.splat.report(stats);
         return std::move(eye.film);
     });
 }
@@ -199,22 +211,19 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     stats.addTime("bvh", t.seconds());
     if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights: the image will be black");
 
+    const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats};
     if (cfg.splats()) {
-        result.film = renderSplat(scene, accel, lights, camera, width, height, cfg, pool, reporter, stats,
-                                  result.outputs.get());
+        result.film = renderSplat(context, result.outputs.get());
     } else {
         // The path tracer does not need the grid; it is built only when asked for.
         if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg, pool, reporter, stats, result.outputs.get());
-        result.film = renderPath(scene, accel, lights, camera, width, height, cfg, pool, reporter, stats);
+        result.film = renderPath(context);
     }
 
     result.attributes = cfg.attributes();
     result.attributes["scene"] = scene.path;
     result.attributes["version"] = versionString();
-    if (!cfg.splats()) {
-        for (const auto& [name, v] : stats.counts)
-            if (name == "samples_per_pixel") result.attributes["spp"] = std::to_string(int64_t(v));
-    }
+    if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(stats.count("samples_per_pixel")));
     for (const auto& [stage, s] : stats.seconds) {
         char b[32];
         std::snprintf(b, sizeof b, "%.4f", s);

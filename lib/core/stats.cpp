@@ -22,6 +22,12 @@ double Stats::time(const std::string& stage) const {
     return 0.0;
 }
 
+double Stats::count(const std::string& name) const {
+    for (const auto& [n, v] : counts)
+        if (n == name) return v;
+    return 0.0;
+}
+
 double Stats::totalSeconds() const {
     double t = 0;
     for (const auto& [name, v] : seconds) t += v;

@@ -8,6 +8,8 @@
 
 namespace rs {
 
+constexpr double kMB = 1024.0 * 1024.0;  // bytes in the *_mb counts
+
 struct Stats {
     std::vector<std::pair<std::string, double>> seconds;  // stage → wall time, in order
     std::vector<std::pair<std::string, double>> counts;   // name → value, in order
@@ -15,6 +17,7 @@ struct Stats {
     void addTime(const std::string& stage, double s);
     void setCount(const std::string& name, double value);
     double time(const std::string& stage) const;  // 0 when absent
+    double count(const std::string& name) const;  // 0 when absent
     double totalSeconds() const;
     std::string json() const;
 };

@@ -277,6 +277,17 @@ void countNodes(const OcclusionTree& tree, OcclusionTreeStats& st) {
 
 }  // namespace
 
+void OcclusionTreeStats::report(Stats& stats) const {
+    stats.setCount("tree_nodes", double(nodes));
+    stats.setCount("tree_nodes_empty", double(empty));
+    stats.setCount("tree_nodes_split", double(split));
+    stats.setCount("tree_nodes_occlusion", double(occlusion));
+    stats.setCount("tree_bricks", double(bricks));
+    stats.setCount("tree_brick_voxels", double(brickVoxels));
+    stats.setCount("tree_depth", double(depth));
+    stats.setCount("tree_mb", double(bytes) / kMB);
+}
+
 OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples, ThreadPool& pool,
                                  OcclusionTreeStats* statsOut) {
     Timer total;

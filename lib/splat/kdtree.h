@@ -41,6 +41,7 @@
 #include "core/math.h"
 #include "grid/occlusion_grid.h"
 #include "core/parallel.h"
+#include "core/stats.h"
 
 namespace rs {
 
@@ -148,6 +149,8 @@ struct OcclusionTreeStats {
     size_t samplesOutside = 0;
     int depth = 0;
     double satSeconds = 0, buildSeconds = 0, sortSeconds = 0, totalSeconds = 0;
+
+    void report(Stats& stats) const;  // tree_* counts
 };
 
 OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples, ThreadPool& pool,

@@ -14,6 +14,7 @@
 
 #include "scene/accel.h"
 #include "scene/bsdf.h"
+#include "core/stats.h"
 #include "core/error.h"
 #include "splat/eye.h"
 #include "scene/lights.h"
@@ -152,6 +153,12 @@ void rebalanceQuotas(const std::vector<std::vector<PhotonRay>>& probe, int64_t m
 }
 
 }  // namespace
+
+void PhotonMap::report(Stats& stats) const {
+    for (int c = 0; c < kPhotonClassCount; ++c)
+        stats.setCount(std::string("photons_") + photonClassName(c), double(count[c]));
+    stats.setCount("photon_paths", double(pathsTraced));
+}
 
 PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const PhotonSettings& st,
                        ThreadPool& pool, Reporter& reporter) {

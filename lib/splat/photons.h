@@ -65,12 +65,15 @@ struct PhotonSettings {
     int64_t maxPaths = 0;                    // 0: 50 × photons
 };
 
+struct Stats;
+
 struct PhotonMap {
     std::vector<PhotonRay> rays;               // in path order
     int64_t pathsFor[kPhotonClassCount] = {};  // N_c: paths emitted until the quota filled
     int64_t count[kPhotonClassCount] = {};
     int64_t pathsTraced = 0;
     size_t bytes() const { return rays.size() * sizeof(PhotonRay); }
+    void report(Stats& stats) const;  // photons_<class> and photon_paths counts
 };
 
 PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSampler& lights,

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "scene/accel.h"
+#include "core/stats.h"
 #include "core/log.h"
 #include "core/parallel.h"
 
@@ -59,6 +60,17 @@ std::vector<uint32_t> coherentOrder(const PhotonMap& photons, const GridGeometry
 }
 
 }  // namespace
+
+void SplatStats::report(Stats& stats) const {
+    stats.setCount("splat_contributions", double(contributions));
+    stats.setCount("traversal_nodes", double(traversal.nodes));
+    stats.setCount("traversal_occluders", double(traversal.occluders));
+    stats.setCount("traversal_samples_reached", double(traversal.samplesReached));
+    stats.setCount("traversal_samples_visited", double(traversal.samplesVisited));
+    stats.setCount("splat_visibility_rays", double(visibilityRays));
+    stats.setCount("splat_refused_behind_origin", double(refused[SegmentReceivers::kBehindOrigin]));
+    stats.setCount("splat_refused_hidden", double(refused[SegmentReceivers::kHidden]));
+}
 
 void SplatStats::add(const SplatStats& o) {
     traversal.add(o.traversal);

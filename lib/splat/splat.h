@@ -14,6 +14,7 @@
 namespace rs {
 
 class ThreadPool;
+struct Stats;
 class Reporter;
 class RayAccel;
 
@@ -23,6 +24,7 @@ struct SplatStats {
     uint64_t visibilityRays = 0;  // Embree occlusion rays of the receiver rules
     uint64_t refused[2] = {};     // samples the receiver rules refused, by SegmentReceivers::Verdict
     void add(const SplatStats& o);
+    void report(Stats& stats) const;  // splat_* and traversal_* counts
 };
 
 // The receiver rules of one photon segment x(i−1) → x(i) (world space): whether an eye
