@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "output/film.h"
+#include "output/image_io.h"
 #include "splat/eye.h"
 #include "splat/photons.h"
 

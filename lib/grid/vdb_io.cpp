@@ -27,7 +27,7 @@
 #include <mutex>
 
 #include "core/error.h"
-#include "output/film.h"
+#include "output/staged_files.h"
 
 #ifndef RAYSPLAT_VERSION
 #define RAYSPLAT_VERSION "dev"
