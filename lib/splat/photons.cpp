@@ -169,7 +169,7 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
     // Quotas.
     int64_t quota[kPhotonClassCount];
     float splitSum = st.split[0] + st.split[1] + st.split[2];
-    if (!(splitSum > 0.f)) throw Error(ErrorKind::Config, "--split must have a positive part");
+    if (!(splitSum > 0.f)) throw Error(ErrorKind::Config, "the photon split must have a positive part");
     int64_t assigned = 0;
     for (int c = 0; c < kPhotonClassCount; ++c) {
         quota[c] = int64_t(std::floor(double(st.photons) * st.split[c] / splitSum));
