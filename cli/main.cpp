@@ -418,7 +418,7 @@ int cmdVoxelize(int argc, char** argv) {
     Scene scene = loadScene(cfg.scene, reporter);
     ThreadPool pool(cfg.threads);
     Stats stats;
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats);
+    OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, reporter, stats);
     const GridGeometry& g = grid.geometry;
     size_t occupied = grid.occupiedCount();
     bool cacheHit = false;

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "grid/grid_stage.h"
 #include "output/image_io.h"
 #include "splat/eye.h"
 #include "splat/photons.h"
@@ -68,10 +69,11 @@ struct RenderConfig {
     ClassTriple maxRadius = PhotonSettings{}.maxRadius;
 
     // Occlusion grid (docs/design.md §5–6).
-    int grid = 192;                  // voxels along the scene's longest axis, 1..4096
-    std::string voxelizer = "auto";  // auto (GPU, CPU when EGL is unusable), gpu, cpu
-    std::string vdb;                 // optional: write the grid used as .vdb
-    std::string cacheDir;            // optional: voxel cache directory (<key>.vdb files)
+    int grid = GridSettings{}.resolution;             // voxels along the scene's longest axis
+    std::string voxelizer = GridSettings{}.voxelizer;  // auto (GPU, CPU when EGL is unusable), gpu, cpu
+    std::string vdb;                                  // optional: write the grid used as .vdb
+    std::string cacheDir;                             // optional: voxel cache directory (<key>.vdb files)
+    GridSettings gridSettings() const { return {grid, voxelizer, vdb, cacheDir}; }
 
     int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? 16 : EyePassSettings{}.spp; }
     int passCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }

@@ -141,7 +141,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     Stats& stats = c.stats;
     // The occlusion grid, once (docs/design.md §5–6). Without visibility the tree indexes the eye
     // samples over an empty grid: nothing occludes.
-    OcclusionGrid grid = buildGrid(c.scene, c.cfg, c.pool, c.reporter, stats, outputs);
+    OcclusionGrid grid = buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, stats, outputs);
     if (c.cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
     EyePassSettings es = eyePassSettings(c);
     PhotonSettings ps = photonSettings(c.cfg, grid.geometry.voxelSize);
@@ -216,7 +216,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
         result.film = renderSplat(context, result.outputs.get());
     } else {
         // The path tracer does not need the grid; it is built only when asked for.
-        if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg, pool, reporter, stats, result.outputs.get());
+        if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg.gridSettings(), pool, reporter, stats, result.outputs.get());
         result.film = renderPath(context);
     }
 

@@ -341,14 +341,14 @@ TEST(GridCache, FirstCallMissesAndWritesTheFileSecondCallHits) {
     RecordingReporter reporter;
 
     Stats first;
-    OcclusionGrid a = buildGrid(scene, cfg, pool, reporter, first);
+    OcclusionGrid a = buildGrid(scene, cfg.gridSettings(), pool, reporter, first);
     EXPECT_EQ(count(first, "grid_cache_hit"), 0);
     std::string path = cachePath(cfg.cacheDir, cacheKey(scene, cfg.grid, VoxelizerKind::Cpu));
     ASSERT_TRUE(fs::exists(path));
     EXPECT_EQ(readVdb(path).metadata.cacheKey, cacheKey(scene, cfg.grid, VoxelizerKind::Cpu));
 
     Stats second;
-    OcclusionGrid b = buildGrid(scene, cfg, pool, reporter, second);
+    OcclusionGrid b = buildGrid(scene, cfg.gridSettings(), pool, reporter, second);
     EXPECT_EQ(count(second, "grid_cache_hit"), 1);
     EXPECT_TRUE(reporter.warnings.empty());
 
@@ -381,7 +381,7 @@ TEST(GridCache, StaleFileUnderTheKeyIsRecomputedWithAWarning) {
     ThreadPool pool(2);
     RecordingReporter reporter;
     Stats stats;
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats);
+    OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, reporter, stats);
     EXPECT_EQ(count(stats, "grid_cache_hit"), 0);
     ASSERT_EQ(reporter.warnings.size(), 1u);
     EXPECT_NE(reporter.warnings[0].find("stale"), std::string::npos) << reporter.warnings[0];
@@ -407,14 +407,14 @@ TEST(GridCache, TamperedGeometryMetadataIsRecomputedWithAWarning) {
     ThreadPool pool(2);
     RecordingReporter reporter;
     Stats stats;
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats);
+    OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, reporter, stats);
     EXPECT_EQ(count(stats, "grid_cache_hit"), 0);
     ASSERT_EQ(reporter.warnings.size(), 1u);
     EXPECT_NE(reporter.warnings[0].find("stale"), std::string::npos) << reporter.warnings[0];
     EXPECT_EQ(grid.geometry.origin, reference(scene, cfg.grid).geometry.origin);
 
     Stats again;
-    buildGrid(scene, cfg, pool, reporter, again);
+    buildGrid(scene, cfg.gridSettings(), pool, reporter, again);
     EXPECT_EQ(count(again, "grid_cache_hit"), 1) << "the rewritten file is a hit";
 }
 
@@ -425,14 +425,14 @@ TEST(GridCache, CorruptFileIsRecomputedWithAWarningAndReplaced) {
     ThreadPool pool(2);
     RecordingReporter quiet;
     Stats s0;
-    buildGrid(scene, cfg, pool, quiet, s0);
+    buildGrid(scene, cfg.gridSettings(), pool, quiet, s0);
     std::string path = cachePath(cfg.cacheDir, cacheKey(scene, cfg.grid, VoxelizerKind::Cpu));
     std::string bytes = readBytes(path);
     writeBytes(path, bytes.substr(0, bytes.size() / 2));
 
     RecordingReporter reporter;
     Stats stats;
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, reporter, stats);
+    OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, reporter, stats);
     EXPECT_EQ(count(stats, "grid_cache_hit"), 0);
     ASSERT_EQ(reporter.warnings.size(), 1u);
     EXPECT_NE(reporter.warnings[0].find(path), std::string::npos) << reporter.warnings[0];
@@ -450,7 +450,7 @@ TEST(GridCache, VdbOptionWritesTheGridUsed) {
     cfg.vdb = dir.file("out.vdb");
     ThreadPool pool(2);
     Stats stats;
-    OcclusionGrid grid = buildGrid(scene, cfg, pool, silentReporter(), stats);
+    OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, silentReporter(), stats);
     EXPECT_EQ(count(stats, "grid_cache_hit"), 0);
     VdbFile back = readVdb(cfg.vdb);
     EXPECT_TRUE(back.grid.counts == grid.counts);
@@ -465,10 +465,10 @@ TEST(GridCache, RejectsBadSettings) {
     Stats stats;
     RenderConfig cfg;
     cfg.voxelizer = "cuda";
-    EXPECT_THROW(buildGrid(scene, cfg, pool, silentReporter(), stats), Error);
+    EXPECT_THROW(buildGrid(scene, cfg.gridSettings(), pool, silentReporter(), stats), Error);
     cfg.voxelizer = "cpu";
     cfg.grid = 0;
-    EXPECT_THROW(buildGrid(scene, cfg, pool, silentReporter(), stats), Error);
+    EXPECT_THROW(buildGrid(scene, cfg.gridSettings(), pool, silentReporter(), stats), Error);
     cfg.grid = 4097;
-    EXPECT_THROW(buildGrid(scene, cfg, pool, silentReporter(), stats), Error);
+    EXPECT_THROW(buildGrid(scene, cfg.gridSettings(), pool, silentReporter(), stats), Error);
 }

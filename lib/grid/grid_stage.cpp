@@ -62,11 +62,12 @@ OcclusionGrid voxelize(const Scene& scene, const GridGeometry& geometry, const s
 
 }  // namespace
 
-OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter,
+OcclusionGrid buildGrid(const Scene& scene, const GridSettings& cfg, ThreadPool& pool, Reporter& reporter,
                         Stats& stats, StagedFiles* outputs) {
-    cfg.validateGrid();
+    if (cfg.voxelizer != "auto" && cfg.voxelizer != "gpu" && cfg.voxelizer != "cpu")
+        throw Error(ErrorKind::Config, "voxelizer '" + cfg.voxelizer + "' is not one of auto, gpu, cpu");
     Timer timer;
-    const GridGeometry geometry = gridForBounds(scene.bounds, cfg.grid);
+    const GridGeometry geometry = gridForBounds(scene.bounds, cfg.resolution);
 
     // Look in the cache, GPU key first: with "auto" either voxelizer may have made the file.
     std::vector<VoxelizerKind> kinds;
@@ -76,7 +77,7 @@ OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool&
     std::string keys[2];
     auto keyOf = [&](VoxelizerKind kind) -> const std::string& {
         std::string& k = keys[kind == VoxelizerKind::Gpu ? 0 : 1];
-        if (k.empty()) k = cacheKey(scene, cfg.grid, kind);
+        if (k.empty()) k = cacheKey(scene, cfg.resolution, kind);
         return k;
     };
     OcclusionGrid grid;

@@ -1,14 +1,14 @@
 // Grid stage (docs/design.md §5–6): Scene → OcclusionGrid, through the voxel cache when there is one.
 //
-// Takes the scene (glTF world) and the config's grid settings (--grid, --voxelizer,
-// --cache, --vdb); returns the OcclusionGrid over gridForBounds(scene.bounds, cfg.grid).
-//  - With cfg.cacheDir: looks for <cacheDir>/<cacheKey>.vdb and loads it when its metadata
+// Takes the scene (glTF world) and the GridSettings (validated by the caller: RenderConfig);
+// returns the OcclusionGrid over gridForBounds(scene.bounds, settings.resolution).
+//  - With a cache directory: looks for <cacheDir>/<cacheKey>.vdb and loads it when its metadata
 //    key and grid geometry match; a stale or unreadable cache file is recomputed with a
 //    warning and rewritten. With --voxelizer auto the GPU key is tried first, then the
 //    CPU key (auto may have fallen back to the CPU when the file was made).
 //  - Otherwise voxelizes: "gpu" (Error(Gpu) without EGL), "cpu", or "auto" (GPU, falling
 //    back to the CPU with a warning when EGL is unusable).
-//  - Writes cfg.vdb when set (an error there is an error of the run; a cache file that
+//  - Writes the .vdb file when one is named (an error there is an error of the run; a cache file that
 //    cannot be written is only a warning).
 // Records the time "voxelize" (the whole stage, load or compute) and the counts "voxels",
 // "occupied_voxels", "grid_bytes", "grid_cache_hit" (0/1).
@@ -16,7 +16,6 @@
 
 #include <string>
 
-#include "config.h"
 #include "core/log.h"
 #include "grid/occlusion_grid.h"
 #include "core/parallel.h"
@@ -26,9 +25,16 @@
 
 namespace rs {
 
-// With `outputs`, cfg.vdb is staged there (committed with the render's other outputs);
+struct GridSettings {
+    int resolution = 192;            // voxels along the scene's longest axis, 1..kMaxGridResolution
+    std::string voxelizer = "auto";  // auto (GPU, CPU when EGL is unusable), gpu, cpu
+    std::string vdb;                 // optional: write the grid used as .vdb
+    std::string cacheDir;            // optional: voxel cache directory (<key>.vdb files)
+};
+
+// With `outputs`, the .vdb is staged there (committed with the render's other outputs);
 // without, it is written atomically right away.
-OcclusionGrid buildGrid(const Scene& scene, const RenderConfig& cfg, ThreadPool& pool, Reporter& reporter,
+OcclusionGrid buildGrid(const Scene& scene, const GridSettings& settings, ThreadPool& pool, Reporter& reporter,
                         Stats& stats, StagedFiles* outputs = nullptr);
 
 // The cache file of a key: <cacheDir>/<key>.vdb.
