@@ -455,6 +455,23 @@ int cmdCompare(int argc, char** argv) {
     return 0;
 }
 
+// The library names settings in backticks (`spp`); on the command line they are flags, spelt
+// the same with two dashes (the output file: -o).
+std::string withFlags(const std::string& message) {
+    std::string out;
+    for (size_t i = 0; i < message.size(); ++i) {
+        const size_t end = message[i] == '`' ? message.find('`', i + 1) : std::string::npos;
+        if (end == std::string::npos) {
+            out += message[i];
+            continue;
+        }
+        const std::string name = message.substr(i + 1, end - i - 1);
+        out += name == "output" ? "-o" : "--" + name;
+        i = end;
+    }
+    return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -471,7 +488,7 @@ int main(int argc, char** argv) {
         if (command == "compare") return cmdCompare(argc, argv);
         throw Error(ErrorKind::Config, "unknown command '" + command + "' (commands: render, info, voxelize, compare)");
     } catch (const Error& e) {
-        std::fprintf(stderr, "raysplat: error: %s\n", e.what());
+        std::fprintf(stderr, "raysplat: error: %s\n", withFlags(e.what()).c_str());
         return 1;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "raysplat: error: out of memory\n");

@@ -21,7 +21,7 @@ Method parseMethod(const std::string& name) {
     if (name == "splat") return Method::Splat;
     if (name == "splat-novis") return Method::SplatNoVis;
     if (name == "path") return Method::Path;
-    throw Error(ErrorKind::Config, "--method " + name + ": unknown method (splat, splat-novis, path)");
+    throw Error(ErrorKind::Config, "`method` " + name + ": unknown method (splat, splat-novis, path)");
 }
 
 const char* directMethodName(DirectMethod d) { return d == DirectMethod::Sample ? "sample" : "photons"; }
@@ -29,7 +29,7 @@ const char* directMethodName(DirectMethod d) { return d == DirectMethod::Sample 
 DirectMethod parseDirectMethod(const std::string& name) {
     if (name == "sample") return DirectMethod::Sample;
     if (name == "photons") return DirectMethod::Photons;
-    throw Error(ErrorKind::Config, "--direct " + name + ": unknown method (sample, photons)");
+    throw Error(ErrorKind::Config, "`direct` " + name + ": unknown method (sample, photons)");
 }
 
 ClassTriple RenderConfig::photonSplit() const {
@@ -38,43 +38,43 @@ ClassTriple RenderConfig::photonSplit() const {
     return out;
 }
 
-static void requireRange(const char* flag, double v, double lo, double hi) {
+static void requireRange(const char* setting, double v, double lo, double hi) {
     if (!(v >= lo && v <= hi)) {
         char buf[256];
-        std::snprintf(buf, sizeof buf, "%s %g is out of range (%g..%g)", flag, v, lo, hi);
+        std::snprintf(buf, sizeof buf, "`%s` %g is out of range (%g..%g)", setting, v, lo, hi);
         throw Error(ErrorKind::Config, buf);
     }
 }
 
 void RenderConfig::validate() const {
-    requireRange("--width", width, 0, 16384);
-    requireRange("--height", height, 0, 16384);
-    if (width == 0 && height == 0) throw Error(ErrorKind::Config, "--width and --height cannot both be 0");
-    requireRange("--spp", spp, 0, 1 << 20);
-    requireRange("--photons", double(photons), 1, 1e9);
+    requireRange("width", width, 0, 16384);
+    requireRange("height", height, 0, 16384);
+    if (width == 0 && height == 0) throw Error(ErrorKind::Config, "`width` and `height` cannot both be 0");
+    requireRange("spp", spp, 0, 1 << 20);
+    requireRange("photons", double(photons), 1, 1e9);
     double splitSum = 0.0;
     for (int c = 0; c < 3; ++c) {
-        requireRange("--split", split[c], 0, 1e6);
-        requireRange("--kernel-photons", kernelPhotons[c], 0.1, 1e6);
-        requireRange("--min-radius", minRadius[c], 0.01, 4096);
-        requireRange("--max-radius", maxRadius[c], minRadius[c], 4096);
+        requireRange("split", split[c], 0, 1e6);
+        requireRange("kernel-photons", kernelPhotons[c], 0.1, 1e6);
+        requireRange("min-radius", minRadius[c], 0.01, 4096);
+        requireRange("max-radius", maxRadius[c], minRadius[c], 4096);
         splitSum += split[c];
     }
-    if (!(splitSum > 0.0)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
+    if (!(splitSum > 0.0)) throw Error(ErrorKind::Config, "`split` needs a positive share for some class");
     if (splitSet && directBySampling() && split[0] > 0.f)
-        throw Error(ErrorKind::Config, "--split gives direct photons a share, but --direct sample (the default) computes "
-                                       "direct light by light sampling: use --split 0,I,C or --direct photons");
+        throw Error(ErrorKind::Config, "`split` gives direct photons a share, but `direct` sample (the default) computes "
+                                       "direct light by light sampling: use `split` 0,I,C or `direct` photons");
     const ClassTriple used = photonSplit();
-    if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "--split needs a positive share for some class");
-    requireRange("--light-samples", lightSamples, 1, 4096);
-    requireRange("--passes", passes, 0, 1 << 20);
-    requireRange("--alpha", alpha, 0.01, 1);
-    requireRange("--max-depth", maxDepth, 1, 1024);
-    requireRange("--threads", threads, 0, 1024);
-    requireRange("--time-limit", timeLimit, 0, 1e7);
-    requireRange("--exposure", exposure, -50, 50);
+    if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "`split` needs a positive share for some class");
+    requireRange("light-samples", lightSamples, 1, 4096);
+    requireRange("passes", passes, 0, 1 << 20);
+    requireRange("alpha", alpha, 0.01, 1);
+    requireRange("max-depth", maxDepth, 1, 1024);
+    requireRange("threads", threads, 0, 1024);
+    requireRange("time-limit", timeLimit, 0, 1e7);
+    requireRange("exposure", exposure, -50, 50);
     validateGrid();
-    if (output.empty()) throw Error(ErrorKind::Config, "no output file: give -o FILE.exr");
+    if (output.empty()) throw Error(ErrorKind::Config, "no output file: give `output` FILE.exr");
     // Refuse before rendering, not after: every output's directory must exist.
     for (const std::string* f : {&output, &png, &statsJson}) {
         if (f->empty()) continue;
@@ -84,13 +84,13 @@ void RenderConfig::validate() const {
             throw Error(ErrorKind::Io, *f + ": directory " + dir.string() + " does not exist");
     }
     double pixels = double(width ? width : height) * double(height ? height : width);
-    if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "--width × --height × --spp is absurdly large");
+    if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
 }
 
 void RenderConfig::validateGrid() const {
-    requireRange("--grid", grid, 1, kMaxGridResolution);
+    requireRange("grid", grid, 1, kMaxGridResolution);
     if (voxelizer != "auto" && voxelizer != "gpu" && voxelizer != "cpu")
-        throw Error(ErrorKind::Config, "--voxelizer " + voxelizer + ": unknown voxelizer (auto, gpu, cpu)");
+        throw Error(ErrorKind::Config, "`voxelizer` " + voxelizer + ": unknown voxelizer (auto, gpu, cpu)");
     if (!vdb.empty()) {
         std::filesystem::path dir = std::filesystem::path(vdb).parent_path();
         std::error_code ec;

@@ -1,12 +1,14 @@
 // RenderConfig: every setting of a render in one aggregate with defaults; the CLI fills it,
-// validate() refuses absurd values with a one-line Error(Config), and every stage takes it
-// as const&. Every setting that changes the image is written to the EXR header.
+// validate() refuses absurd values with a one-line Error(Config), and render() builds each
+// stage's settings from it. Every setting that changes the image is written to the EXR
+// header. Messages name a setting in backticks (`spp`), not as any command line spells it.
 #pragma once
 
 #include <string>
 
 #include "grid/grid_stage.h"
 #include "output/image_io.h"
+#include "path/path.h"
 #include "splat/eye.h"
 #include "splat/photons.h"
 
@@ -75,7 +77,7 @@ struct RenderConfig {
     std::string cacheDir;                             // optional: voxel cache directory (<key>.vdb files)
     GridSettings gridSettings() const { return {grid, voxelizer, vdb, cacheDir}; }
 
-    int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? 16 : EyePassSettings{}.spp; }
+    int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? PathSettings{}.spp : EyePassSettings{}.spp; }
     int passCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }
     bool directBySampling() const { return direct == DirectMethod::Sample; }
     ClassTriple photonSplit() const;

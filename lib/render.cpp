@@ -73,6 +73,16 @@ PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
     return ps;
 }
 
+PathSettings pathSettings(const RenderContext& c) {
+    PathSettings ps;
+    ps.width = c.width;
+    ps.height = c.height;
+    ps.spp = c.cfg.samplesPerPixel();
+    ps.maxDepth = c.cfg.maxDepth;
+    ps.seed = c.cfg.seed;
+    return ps;
+}
+
 SplatSettings splatSettings(const RenderConfig& cfg) {
     SplatSettings splat;
     splat.visibility = cfg.method == Method::Splat;
@@ -116,13 +126,14 @@ float passRadiusScale(int p, float alpha) {
 }
 
 Film renderPath(const RenderContext& c) {
-    const int spp = c.cfg.samplesPerPixel();
+    PathSettings ps = pathSettings(c);
+    const int spp = ps.spp;
     int passes = 0;
     Timer t;
     Film film = renderPasses(c, [&](int pass) {
         passes = pass + 1;
-        return renderPathPass(c.scene, c.accel, c.lights, c.camera, c.width, c.height, c.cfg, {pass * spp, spp}, c.pool,
-                              c.reporter);
+        ps.firstSample = pass * spp;
+        return renderPathPass(c.scene, c.accel, c.lights, c.camera, ps, c.pool, c.reporter);
     });
     c.stats.addTime("render", t.seconds());
     c.stats.setCount("samples_per_pixel", double(passes) * spp);

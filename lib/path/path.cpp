@@ -101,8 +101,8 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
 }
 
 Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
-                    int width, int height, const RenderConfig& cfg, const PathPass& pass, ThreadPool& pool,
-                    Reporter& reporter) {
+                    const PathSettings& pass, ThreadPool& pool, Reporter& reporter) {
+    const int width = pass.width, height = pass.height;
     Film film(width, height);
     CameraRays rays(camera, width, height);
     const float invSpp = 1.f / float(pass.spp);
@@ -111,13 +111,13 @@ Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSample
         for (int64_t y = y0; y < y1; ++y) {
             for (int x = 0; x < width; ++x) {
                 size_t pixel = size_t(y) * width + x;
-                uint64_t scramble = hashKey(cfg.seed, Stage::Camera, pixel);
+                uint64_t scramble = hashKey(pass.seed, Stage::Camera, pixel);
                 for (int s = 0; s < pass.spp; ++s) {
                     uint32_t index = uint32_t(pass.firstSample + s);
                     Vec2 jitter = sobol2D(index, scramble);
-                    Sampler sampler(cfg.seed, Stage::Path, pixelSampleKey(pixel, index));
+                    Sampler sampler(pass.seed, Stage::Path, pixelSampleKey(pixel, index));
                     PathRadiance r = tracePath(scene, accel, lights, rays.origin(),
-                                               rays.direction(Vec2(float(x), float(y)) + jitter), cfg.maxDepth, sampler);
+                                               rays.direction(Vec2(float(x), float(y)) + jitter), pass.maxDepth, sampler);
                     for (int l = 0; l < kLayerCount; ++l) {
                         Vec3 v = r.layer[l];
                         if (isFinite(v)) film.layers[l][pixel] += v * invSpp;  // one NaN must not poison a pixel

@@ -5,8 +5,9 @@
 // (seed, pixel, sample index): the image does not depend on the thread count.
 #pragma once
 
+#include "core/sampling.h"
 #include "scene/accel.h"
-#include "config.h"
+#include "scene/camera.h"
 #include "output/film.h"
 #include "scene/lights.h"
 #include "core/log.h"
@@ -14,9 +15,12 @@
 
 namespace rs {
 
-struct PathPass {
+struct PathSettings {
+    int width = 500, height = 500;
     int firstSample = 0;  // sample indices [firstSample, firstSample + spp) of every pixel
-    int spp = 1;
+    int spp = 16;
+    int maxDepth = kDefaultMaxDepth;
+    uint64_t seed = 0;
 };
 
 // Renders one pass; the film holds the average over the pass's samples. Layers split the
@@ -24,8 +28,7 @@ struct PathPass {
 // directly (through specular chains), direct, caustic (light → specular+ → first diffuse
 // vertex), indirect.
 Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
-                    int width, int height, const RenderConfig& cfg, const PathPass& pass, ThreadPool& pool,
-                    Reporter& reporter);
+                    const PathSettings& settings, ThreadPool& pool, Reporter& reporter);
 
 // Radiance along one camera ray, split into layers (for tests: analytic checks).
 struct PathRadiance {
