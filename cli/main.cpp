@@ -27,6 +27,23 @@ using namespace rs;
 
 namespace {
 
+// The library names settings in backticks (`spp`); on the command line they are flags, spelt
+// the same with two dashes (the output file: -o).
+std::string withFlags(const std::string& message) {
+    std::string out;
+    for (size_t i = 0; i < message.size(); ++i) {
+        const size_t end = message[i] == '`' ? message.find('`', i + 1) : std::string::npos;
+        if (end == std::string::npos) {
+            out += message[i];
+            continue;
+        }
+        const std::string name = message.substr(i + 1, end - i - 1);
+        out += name == "output" ? "-o" : "--" + name;
+        i = end;
+    }
+    return out;
+}
+
 // -- Console reporter: a progress bar on a TTY, plain lines otherwise, nothing with --quiet.
 // Stages may nest one level: the render's passes are the outer stage, each pass's stages
 // (eye pass, photons, splatting) the inner one; the bar then shows both, and only the
@@ -39,12 +56,12 @@ public:
         if (quiet_) return;
         std::lock_guard<std::mutex> lock(mutex_);
         clearBar();
-        std::fprintf(stderr, "raysplat: %s\n", m.c_str());
+        std::fprintf(stderr, "raysplat: %s\n", withFlags(m).c_str());
     }
     void warn(const std::string& m) override {
         std::lock_guard<std::mutex> lock(mutex_);
         clearBar();
-        std::fprintf(stderr, "raysplat: warning: %s\n", m.c_str());
+        std::fprintf(stderr, "raysplat: warning: %s\n", withFlags(m).c_str());
     }
     void begin(const std::string& stage, int64_t total, const char* unit) override {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -383,7 +400,7 @@ int cmdInfo(int argc, char** argv) {
         try {
             description = describeGpu();
         } catch (const Error& e) {
-            description = std::string("none: ") + e.what();
+            description = std::string("none: ") + withFlags(e.what());
         }
         std::printf("gpu         %s\n", description.c_str());
     }
@@ -453,23 +470,6 @@ int cmdCompare(int argc, char** argv) {
         std::printf("%-10s %12.6g %12.6g\n", name.c_str(), relativeMse(x, y), std::sqrt(mse / double(x.size())));
     }
     return 0;
-}
-
-// The library names settings in backticks (`spp`); on the command line they are flags, spelt
-// the same with two dashes (the output file: -o).
-std::string withFlags(const std::string& message) {
-    std::string out;
-    for (size_t i = 0; i < message.size(); ++i) {
-        const size_t end = message[i] == '`' ? message.find('`', i + 1) : std::string::npos;
-        if (end == std::string::npos) {
-            out += message[i];
-            continue;
-        }
-        const std::string name = message.substr(i + 1, end - i - 1);
-        out += name == "output" ? "-o" : "--" + name;
-        i = end;
-    }
-    return out;
 }
 
 }  // namespace

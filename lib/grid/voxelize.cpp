@@ -321,7 +321,7 @@ OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Repo
 namespace rs {
 
 OcclusionGrid voxelizeGpu(const Scene&, const GridGeometry&, Reporter&, VoxelizeTimings*) {
-    throw Error(ErrorKind::Gpu, "built without EGL (meson option -Degl=enabled): use --voxelizer cpu");
+    throw Error(ErrorKind::Gpu, "built without EGL (meson option -Degl=enabled): use the CPU voxelizer (`voxelizer` cpu)");
 }
 
 }  // namespace rs

@@ -24,7 +24,7 @@ void checkGridSize(const GridGeometry& grid) {
     if (bytes > kMaxGridBytes) {
         char buf[200];
         std::snprintf(buf, sizeof buf,
-                      "a %dx%dx%d grid needs %.1f GiB for its occlusion counts (limit %.0f GiB): use a smaller --grid",
+                      "a %dx%dx%d grid needs %.1f GiB for its occlusion counts (limit %.0f GiB): use a smaller `grid`",
                       grid.dims.x, grid.dims.y, grid.dims.z, bytes / double(1ull << 30),
                       kMaxGridBytes / double(1ull << 30));
         throw Error(ErrorKind::Config, buf);
