@@ -1,5 +1,6 @@
 // The raysplat command: argument parsing, console log and progress. The only place that
 // catches rs::Error: it prints "raysplat: error: …" on one line and exits with 1.
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -22,6 +23,7 @@
 #include "render.h"
 #include "scene/scene.h"
 #include "core/stats.h"
+#include "core/stop.h"
 
 using namespace rs;
 
@@ -472,6 +474,20 @@ int cmdCompare(int argc, char** argv) {
     return 0;
 }
 
+// SIGINT and SIGTERM ask the render to stop (core/stop.h): it ends at the next chunk of work,
+// its staged outputs are removed, and the command exits 128 + the signal. A second signal
+// changes nothing: the first one's cleanup runs to its end.
+extern "C" void onStopSignal(int signal) { requestStop(signal); }
+
+void installStopHandlers() {
+    struct sigaction action {};
+    action.sa_handler = onStopSignal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(SIGINT, &action, nullptr);
+    sigaction(SIGTERM, &action, nullptr);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -480,6 +496,7 @@ int main(int argc, char** argv) {
         return argc < 2 ? 2 : 0;
     }
     std::string command = argv[1];
+    installStopHandlers();
     try {
         if (command == "--version") { std::printf("raysplat %s\n", versionString()); return 0; }
         if (command == "render") return cmdRender(argc, argv);
@@ -488,6 +505,10 @@ int main(int argc, char** argv) {
         if (command == "compare") return cmdCompare(argc, argv);
         throw Error(ErrorKind::Config, "unknown command '" + command + "' (commands: render, info, voxelize, compare)");
     } catch (const Error& e) {
+        if (e.kind() == ErrorKind::Interrupted) {
+            std::fprintf(stderr, "raysplat: %s: stopped, no output written\n", e.what());
+            return 128 + stopSignal();
+        }
         std::fprintf(stderr, "raysplat: error: %s\n", withFlags(e.what()).c_str());
         return 1;
     } catch (const std::bad_alloc&) {

@@ -16,6 +16,7 @@
 #include "splat/kdtree.h"
 #include "scene/lights.h"
 #include "core/parallel.h"
+#include "core/stop.h"
 #include "path/path.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
@@ -105,6 +106,7 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass) {
     int passes = 0;
     double longest = 0.0;
     for (;;) {
+        throwIfStopped();
         Timer one;
         sum.add(pass(passes));
         ++passes;
@@ -246,9 +248,11 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
 void writeOutputs(RenderResult& result, const RenderConfig& cfg) {
     // All or nothing: every file is written under a temporary name first.
     StagedFiles& out = *result.outputs;
+    throwIfStopped();
     writeExrTo(out.stage(cfg.output), cfg.output, result.film, result.attributes);
     if (!cfg.png.empty()) writeFileTo(out.stage(cfg.png), cfg.png, encodePng(result.film, cfg.exposure));
     if (!cfg.statsJson.empty()) writeFileTo(out.stage(cfg.statsJson), cfg.statsJson, result.stats.json());
+    throwIfStopped();  // the last moment a stop leaves nothing: the renames follow
     out.commit();
 }
 

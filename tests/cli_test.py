@@ -412,6 +412,63 @@ def test_one_and_two_threads_give_identical_pixels():
 # -- Runner ----------------------------------------------------------------------------------
 
 
+# -- Interrupted renders ---------------------------------------------------------------------
+
+
+def interrupt(case, signals, delay, command="render"):
+    """Starts a command writing into an empty folder, sends `signals` (0.05 s apart) `delay`
+    seconds in, and checks the stop: exit 128 + the first signal and one line saying so, or
+    (when it had finished) exit 0 with every output; never a partial output or a temporary."""
+    import signal as sig
+    import time
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_sig_") as out:
+        if command == "render":
+            args = ["render", CORNELL, "-o", os.path.join(out, "a.exr"), "--png", os.path.join(out, "a.png"),
+                    "--stats-json", os.path.join(out, "a.json"), "--vdb", os.path.join(out, "a.vdb"),
+                    "--width", "160", "--passes", "6"]
+            outputs = ["a.exr", "a.png", "a.json", "a.vdb"]
+        else:
+            args = ["voxelize", CORNELL, "-o", os.path.join(out, "a.vdb"), "--grid", "640", "--voxelizer", "cpu"]
+            outputs = ["a.vdb"]
+        p = subprocess.Popen([RAYSPLAT, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             errors="replace")
+        time.sleep(delay)
+        sent = time.monotonic()
+        for s in signals:
+            p.send_signal(s)
+            time.sleep(0.05)
+        try:
+            _, err = p.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise Failure("%s: still running 30 s after the signal" % case)
+        stopped = time.monotonic() - sent
+        left = sorted(os.listdir(out))
+        if p.returncode == 0:
+            check(left == sorted(outputs), "%s: finished, but the folder holds %s" % (case, left))
+            return
+        first = signals[0]
+        name = "SIGINT" if first == sig.SIGINT else "SIGTERM"
+        check(p.returncode == 128 + first, "%s: exit %d, expected %d" % (case, p.returncode, 128 + first))
+        lines = [l for l in err.splitlines() if "interrupted" in l]
+        check(len(lines) == 1 and name in lines[0], "%s: no one line naming %s: %r" % (case, name, err[-300:]))
+        check(left == [], "%s: left %s behind" % (case, left))
+        # A hang detector, not a speed figure: the stop comes at the next chunk of work.
+        check(stopped < 10, "%s: took %.1f s to stop" % (case, stopped))
+        MESSAGES.append((case, command, "%s (stopped %.2f s after the signal)" % (lines[0], stopped)))
+
+
+def interrupt_tests():
+    import signal as sig
+    return [
+        ("SIGINT during set-up", lambda: interrupt("SIGINT during set-up", [sig.SIGINT], 0.15)),
+        ("SIGINT during the passes", lambda: interrupt("SIGINT during the passes", [sig.SIGINT], 1.5)),
+        ("SIGTERM during the passes", lambda: interrupt("SIGTERM during the passes", [sig.SIGTERM], 3.0)),
+        ("two SIGINTs", lambda: interrupt("two SIGINTs", [sig.SIGINT, sig.SIGINT], 1.0)),
+        ("SIGTERM while voxelizing", lambda: interrupt("SIGTERM while voxelizing", [sig.SIGTERM], 0.5, "voxelize")),
+    ]
+
+
 def main():
     if not os.access(RAYSPLAT, os.X_OK):
         print("cli_test: %s is not an executable (set RAYSPLAT)" % RAYSPLAT)
@@ -420,6 +477,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
         tests = [("bad scene: " + n, f) for n, f in bad_scene_tests(tmp)]
         tests += [("bad setting: " + n, f) for n, f in bad_setting_tests()]
+        tests += [("interrupted: " + n, f) for n, f in interrupt_tests()]
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,
             test_no_arguments_prints_usage_and_exits_2,

@@ -9,7 +9,7 @@
 
 namespace rs {
 
-enum class ErrorKind { Io, Scene, Config, Gpu, Embree, Internal };
+enum class ErrorKind { Io, Scene, Config, Gpu, Embree, Internal, Interrupted };
 
 class Error : public std::runtime_error {
 public:

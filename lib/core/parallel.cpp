@@ -1,5 +1,7 @@
 #include "core/parallel.h"
 
+#include "core/stop.h"
+
 namespace rs {
 
 int ThreadPool::hardwareThreads() { return std::max(1u, std::thread::hardware_concurrency()); }
@@ -23,6 +25,7 @@ void ThreadPool::runChunks(int thread) {
         int64_t begin = next_.fetch_add(chunk_);
         if (begin >= n_ || failed_.load(std::memory_order_relaxed)) return;
         try {
+            throwIfStopped();
             (*fn_)(begin, std::min(begin + chunk_, n_), thread);
         } catch (...) {
             std::lock_guard<std::mutex> lock(mutex_);
@@ -54,7 +57,10 @@ void ThreadPool::parallelFor(int64_t n, int64_t chunk, const ChunkFn& fn) {
     if (n <= 0) return;
     chunk = std::max<int64_t>(chunk, 1);
     if (workers_.empty() || n <= chunk) {
-        for (int64_t b = 0; b < n; b += chunk) fn(b, std::min(b + chunk, n), 0);
+        for (int64_t b = 0; b < n; b += chunk) {
+            throwIfStopped();
+            fn(b, std::min(b + chunk, n), 0);
+        }
         return;
     }
     {

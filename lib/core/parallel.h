@@ -26,6 +26,7 @@ public:
 
     using ChunkFn = std::function<void(int64_t begin, int64_t end, int thread)>;
     // Runs fn over [0, n) in chunks of `chunk`; rethrows the first exception a chunk threw.
+    // A requested stop (core/stop.h) ends it between chunks with Error(Interrupted).
     void parallelFor(int64_t n, int64_t chunk, const ChunkFn& fn);
 
     static int hardwareThreads();

@@ -27,6 +27,7 @@
 #include <mutex>
 
 #include "core/error.h"
+#include "core/stop.h"
 #include "output/staged_files.h"
 
 #ifndef RAYSPLAT_VERSION
@@ -134,7 +135,8 @@ void writeVdbTo(const std::string& tmp, const std::string& path, const Occlusion
         openvdb::FloatGrid::Accessor oAcc[kSideCount] = {occ[0]->getAccessor(), occ[1]->getAccessor(),
                                                          occ[2]->getAccessor(), occ[3]->getAccessor(),
                                                          occ[4]->getAccessor(), occ[5]->getAccessor()};
-        for (int z = 0; z < g.dims.z; ++z)
+        for (int z = 0; z < g.dims.z; ++z) {
+            throwIfStopped();
             for (int y = 0; y < g.dims.y; ++y)
                 for (int x = 0; x < g.dims.x; ++x) {
                     size_t i = g.index(x, y, z);
@@ -151,6 +153,7 @@ void writeVdbTo(const std::string& tmp, const std::string& path, const Occlusion
                     float len = glm::length(n);
                     nAcc.setValueOn(ijk, toVdb(len > 0.f ? n / len : Vec3(0.f)));
                 }
+        }
     }
 
     openvdb::GridPtrVec grids;
@@ -182,6 +185,7 @@ void writeVdbTo(const std::string& tmp, const std::string& path, const Occlusion
                     openvdb::StringMetadata("index (i,j,k) -> centre of voxel (i,j,k) in Blender world; "
                                             "Blender (x,y,z) = glTF (x,-z,y); glTF = origin + voxel*voxel_size"));
 
+    throwIfStopped();  // the write itself cannot be interrupted
     try {
         openvdb::io::File file(tmp);
         file.write(grids, meta);

@@ -30,6 +30,7 @@
 #include "grid/gpu_context.h"
 #include "grid/shaders.h"
 #include "core/stats.h"
+#include "core/stop.h"
 
 namespace rs {
 
@@ -294,6 +295,7 @@ OcclusionGrid voxelizeGpu(const Scene& scene, const GridGeometry& geometry, Repo
     reporter.begin("voxelizing (gpu)", int64_t(passes.size()), "passes");
     std::vector<uint32_t> pixels(size_t(texSize.x) * size_t(texSize.y) * 4);
     for (const Pass& pass : passes) {
+        throwIfStopped();
         Timer rasterTimer;
         drawPass(pass, geometry.dims, limits, uniforms, lists, tris.count(), gl);
         time.raster += rasterTimer.seconds();
