@@ -412,6 +412,23 @@ def test_one_and_two_threads_give_identical_pixels():
 # -- Runner ----------------------------------------------------------------------------------
 
 
+def test_repeated_warnings_collapse():
+    """Eight primitives that are lines: one warning, one '… and 7 more' line, then the error
+    (the scene has no triangles left), not eight warnings."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
+        doc, _ = triangle_gltf()
+        doc["meshes"][0]["primitives"] = [{"attributes": {"POSITION": 0}, "mode": 1} for _ in range(8)]
+        scene = write_json(os.path.join(tmp, "lines.gltf"), doc)
+        r = run("info", scene)
+        lines = r.stderr.splitlines()
+        MESSAGES.append(("eight line primitives", "info", " | ".join(lines)))
+        check(r.returncode == 1, "exit %d, expected 1: %r" % (r.returncode, r.stderr))
+        check(len(lines) == 3, "stderr is %d lines, expected 3 (warning, summary, error): %r" % (len(lines), r.stderr))
+        check("not made of triangles" in lines[0] and "primitive 0" in lines[0], "first warning: %r" % lines[0])
+        check("and 7 more" in lines[1], "no summary of the other 7: %r" % lines[1])
+        check(lines[2].startswith("raysplat: error: ") and "no triangles" in lines[2], "error: %r" % lines[2])
+
+
 # -- Interrupted renders ---------------------------------------------------------------------
 
 
@@ -480,6 +497,7 @@ def main():
         tests += [("interrupted: " + n, f) for n, f in interrupt_tests()]
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,
+            test_repeated_warnings_collapse,
             test_no_arguments_prints_usage_and_exits_2,
             test_help_of_each_command,
             test_good_render_writes_exr_png_and_stats,

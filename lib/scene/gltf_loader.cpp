@@ -23,6 +23,25 @@ std::string firstLine(std::string s) {
 }  // namespace
 
 Scene GltfLoader::load() {
+    try {
+        return loadAll();
+    } catch (...) {
+        reportRepeatedWarnings();  // before the error that follows them
+        throw;
+    }
+}
+
+void GltfLoader::warn(const std::string& kind, const std::string& message) {
+    if (repeated_[kind]++ == 0) reporter_.warn(path_ + ": " + message);
+}
+
+void GltfLoader::reportRepeatedWarnings() {
+    for (const auto& [kind, count] : repeated_)
+        if (count > 1) reporter_.warn(path_ + ": … and " + std::to_string(count - 1) + " more " + kind);
+    repeated_.clear();
+}
+
+Scene GltfLoader::loadAll() {
     readFile();
     checkExtensions();
     scene_.path = path_;
@@ -37,6 +56,7 @@ Scene GltfLoader::load() {
 
     if (scene_.triangleCount() == 0) fail("the scene has no triangles");
     scene_.computeBounds();
+    reportRepeatedWarnings();
     // tinygltf's warning only once the load succeeded: a failed load is one error line.
     if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
     return std::move(scene_);
@@ -108,7 +128,8 @@ void GltfLoader::addCamera(int index, const Mat4& world, const std::string& node
     if (index >= int(model_.cameras.size())) fail(nodeWhere + " references camera " + std::to_string(index) + " which does not exist");
     const tinygltf::Camera& c = model_.cameras[index];
     if (c.type != "perspective") {
-        reporter_.warn(path_ + ": " + quoted("camera", index, c.name) + " is " + c.type + "; only perspective cameras are used");
+        warn("cameras that are not perspective (not used)",
+             quoted("camera", index, c.name) + " is " + c.type + "; only perspective cameras are used");
         return;
     }
     Camera cam;

@@ -31,6 +31,12 @@ public:
     Scene load();
 
 private:
+    Scene loadAll();
+    // A warning of a kind is printed the first time; the rest of that kind are counted and
+    // summed up as "… and N more <kind>" when the load ends (one line, not one per object).
+    void warn(const std::string& kind, const std::string& message);
+    void reportRepeatedWarnings();
+
     // -- The file, the node hierarchy, cameras (gltf_loader.cpp)
     [[noreturn]] void fail(const std::string& what, ErrorKind kind = ErrorKind::Scene) const;
     void readFile();
@@ -59,6 +65,7 @@ private:
     uint32_t defaultMaterial_ = 0;
     std::vector<PunctualLight> lightTemplates_;
     std::map<int, int> textureOfImage_;
+    std::map<std::string, int> repeated_;  // warnings by kind
     std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
 };
 

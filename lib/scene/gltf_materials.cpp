@@ -43,7 +43,7 @@ void GltfLoader::loadMaterials() {
         if (pbr.baseColorTexture.index >= 0)
             out.baseColorTexture = loadTexture(pbr.baseColorTexture.index, where);
         if (m.emissiveTexture.index >= 0)
-            reporter_.warn(path_ + ": " + where + ": emissiveTexture is ignored (emissiveFactor used)");
+            warn("materials with an emissiveTexture (ignored)", where + ": emissiveTexture is ignored (emissiveFactor used)");
 
         if (transmission > 0.f) {
             if (transmission < 1.f)

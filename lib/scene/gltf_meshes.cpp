@@ -89,7 +89,8 @@ void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& no
         std::string where = quoted("mesh", meshIndex, mesh.name) + " primitive " + std::to_string(pi) + " (" + nodeWhere + ")";
         int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
         if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-            reporter_.warn(path_ + ": " + where + " is not made of triangles (mode " + std::to_string(mode) + "): skipped");
+            warn("primitives that are not triangles (skipped)",
+                 where + " is not made of triangles (mode " + std::to_string(mode) + "): skipped");
             continue;
         }
         auto pos = prim.attributes.find("POSITION");
