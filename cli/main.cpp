@@ -20,6 +20,7 @@
 #include "grid/grid_stage.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "memory.h"
 #include "render.h"
 #include "scene/scene.h"
 #include "core/stats.h"
@@ -181,6 +182,16 @@ float parseFloat(const std::string& flag, const std::string& s) {
     return v;
 }
 
+// "8G", "512M", "64k" or bytes → bytes (binary units).
+uint64_t parseSize(const std::string& flag, const std::string& s) {
+    const char unit = s.empty() ? '\0' : char(std::toupper(static_cast<unsigned char>(s.back())));
+    const int shift = unit == 'K' ? 10 : unit == 'M' ? 20 : unit == 'G' ? 30 : unit == 'T' ? 40 : 0;
+    const double v = parseFloat(flag, shift ? s.substr(0, s.size() - 1) : s);
+    if (!(v > 0.0) || v * double(uint64_t(1) << shift) > 1e18)
+        throw Error(ErrorKind::Config, flag + " " + s + " is not a size (a positive number of bytes, or with K, M, G, T)");
+    return uint64_t(v * double(uint64_t(1) << shift));
+}
+
 // "a,b,c" → three numbers.
 void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out) {
     float v[3];
@@ -276,6 +287,9 @@ void addGridOptions(Command& cmd, RenderConfig& cfg) {
              [&](const std::string& v) { cfg.voxelizer = v; }});
     cmd.add({"--cache", "DIR", "voxel cache: reuse DIR/<key>.vdb when scene and settings match, else write it",
              [&](const std::string& v) { cfg.cacheDir = v; }});
+    cmd.add({"--max-memory", "SIZE", "refuse settings whose estimated memory exceeds SIZE (e.g. 8G, 512M; default: "
+                                     "the memory available now)",
+             [&](const std::string& v) { cfg.maxMemory = parseSize("--max-memory", v); }});
 }
 
 int cmdRender(int argc, char** argv) {
@@ -435,6 +449,11 @@ int cmdVoxelize(int argc, char** argv) {
 
     ConsoleReporter reporter(quiet);
     Scene scene = loadScene(cfg.scene, reporter);
+    const IVec3 dims = gridForBounds(scene.bounds, cfg.grid).dims;
+    const int gridDims[3] = {dims.x, dims.y, dims.z};
+    MemoryEstimate memory;
+    memory.grid = estimateMemory(cfg, gridDims, 0, 0, 0, 0).grid;
+    checkMemory(memory, cfg.maxMemory);
     ThreadPool pool(cfg.threads);
     Stats stats;
     OcclusionGrid grid = buildGrid(scene, cfg.gridSettings(), pool, reporter, stats);

@@ -41,6 +41,7 @@ struct RenderConfig {
     int maxDepth = kDefaultMaxDepth;
     uint64_t seed = 0;
     int threads = 0;         // 0: all hardware threads
+    uint64_t maxMemory = 0;  // bytes a render may need (memory.h's estimate); 0: what the machine has available
     // Passes (splat: each a new eye pass and new photons, kernels shrinking from pass to
     // pass; path: each --spp samples a pixel), averaged; 0: the method's default (splat 8,
     // path 1). With a time limit, passes are rendered until the time is up (at least one)

@@ -17,6 +17,7 @@
 #include "scene/lights.h"
 #include "core/parallel.h"
 #include "core/stop.h"
+#include "memory.h"
 #include "path/path.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
@@ -211,6 +212,16 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     Camera camera = scene.camera(cfg.camera);
     int width, height;
     cfg.resolution(camera.aspect, width, height);
+    // Refuse settings the machine cannot hold before allocating anything large.
+    const GridGeometry geometry = cfg.splats() || !cfg.vdb.empty() || !cfg.cacheDir.empty()
+                                      ? gridForBounds(scene.bounds, cfg.grid)
+                                      : GridGeometry();
+    const int gridDims[3] = {geometry.dims.x, geometry.dims.y, geometry.dims.z};
+    const int threads = cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads();
+    const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), width, height, threads);
+    checkMemory(memory, cfg.maxMemory);
+    stats.setCount("memory_estimate_mb", memory.total() / kMB);
+
     ThreadPool pool(cfg.threads);
     stats.setCount("threads", pool.size());
     stats.setCount("triangles", double(scene.triangleCount()));

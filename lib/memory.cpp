@@ -1,0 +1,98 @@
+#include "memory.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "grid/occlusion_grid.h"
+#include "splat/photons.h"
+
+namespace rs {
+
+namespace {
+
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
+// Per eye sample: 24 bytes and a 20-byte lobe at most, the eye pass's rows appended into one
+// array (twice), and the tree build's keys, flags, order and one permuted array.
+constexpr double kBytesPerEyeSample = 2 * (24 + 20) + 8 + 2 + 4 + 12;
+// Per pixel: the film's six RGB buffers (layers, albedo, normal) three times over (the sum of
+// the passes, a pass's film, the eye pass's).
+constexpr double kFilmBytesPerPixel = 3 * 6 * 12;
+// Per pixel and thread: the splat's fixed-point accumulators (three layers × RGB × 8 bytes).
+constexpr double kSplatBytesPerPixelThread = 3 * 3 * 8;
+// Per triangle: the scene's vertex data and Embree's BVH (high quality, robust).
+constexpr double kBvhBytesPerTriangle = 3 * (12 + 12 + 8) + 160;
+// The process before any of it: libraries, the EGL context (llvmpipe's is the largest), the
+// threads' stacks. A Cornell box render at 200 px peaks at 181 MB, of which the above is 95.
+constexpr double kBaseBytes = 128.0 * 1024 * 1024;
+
+}  // namespace
+
+std::string MemoryEstimate::describe() const {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "%.2f GiB (grid %.2f, tree %.2f, eye samples %.2f, photons %.2f, film %.2f, splat buffers %.2f, "
+                  "BVH %.2f, base %.2f)",
+                  total() / kGiB, grid / kGiB, tree / kGiB, eye / kGiB, photons / kGiB, film / kGiB, splat / kGiB,
+                  bvh / kGiB, base / kGiB);
+    return buf;
+}
+
+MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t triangles, int width, int height,
+                              int threads) {
+    MemoryEstimate m;
+    m.base = kBaseBytes;
+    const double pixels = double(width) * double(height);
+    const bool grid = cfg.splats() || !cfg.vdb.empty() || !cfg.cacheDir.empty();
+    if (grid) {
+        const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);
+        // The counts, and the GPU voxelizer's read-back tile (RGBA32UI, at most 4096² pixels).
+        const double tile = std::min(4.0 * dims[0], 4096.0) * std::min(4.0 * std::max(dims[1], dims[2]), 4096.0);
+        m.grid = voxels * kSideCount + tile * 16;
+    }
+    m.film = pixels * kFilmBytesPerPixel;
+    m.bvh = double(triangles) * kBvhBytesPerTriangle;
+    if (cfg.splats()) {
+        const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);
+        m.eye = pixels * cfg.samplesPerPixel() * kBytesPerEyeSample;
+        m.tree = voxels / 64.0 * 8;  // the summed-area table over the bricks, and their payloads
+        m.photons = double(cfg.photons) * sizeof(PhotonRay) * 1.5;  // the map grows by doubling
+        m.splat = pixels * kSplatBytesPerPixelThread * std::max(threads, 1);
+    }
+    return m;
+}
+
+uint64_t availableMemory() {
+    uint64_t available = 0;
+    std::ifstream meminfo("/proc/meminfo");
+    for (std::string line; std::getline(meminfo, line);) {
+        if (line.rfind("MemAvailable:", 0) != 0) continue;
+        std::istringstream in(line.substr(13));
+        uint64_t kb = 0;
+        if (in >> kb) available = kb * 1024;
+    }
+    // cgroup v2: the limit of this process's group, less what it already uses.
+    std::ifstream maxFile("/sys/fs/cgroup/memory.max"), currentFile("/sys/fs/cgroup/memory.current");
+    std::string maxText;
+    uint64_t current = 0;
+    if (maxFile >> maxText && maxText != "max" && currentFile >> current) {
+        const uint64_t limit = std::strtoull(maxText.c_str(), nullptr, 10);
+        if (limit > current) available = available ? std::min(available, limit - current) : limit - current;
+    }
+    return available;
+}
+
+void checkMemory(const MemoryEstimate& estimate, uint64_t limitBytes) {
+    const bool machine = limitBytes == 0;
+    const uint64_t limit = machine ? availableMemory() : limitBytes;
+    if (limit == 0 || estimate.total() <= double(limit)) return;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " but %.2f GiB %s", double(limit) / kGiB,
+                  machine ? "are available (raise the limit with `max-memory` to try anyway)" : "are allowed (`max-memory`)");
+    throw Error(ErrorKind::Config, "this render needs about " + estimate.describe() + buf);
+}
+
+}  // namespace rs
