@@ -435,6 +435,35 @@ def test_repeated_warnings_collapse():
         check(lines[2].startswith("raysplat: error: ") and "no triangles" in lines[2], "error: %r" % lines[2])
 
 
+def test_cache_under_concurrent_writers():
+    """Four voxelize runs share one --cache folder and start together (two at once, then two
+    more while they write): all succeed, none warns of a broken cache file (a reader never
+    sees a half-written one: files are renamed into place whole), the folder ends with one
+    cache file and no temporary, and a later run reads that file and gets the same grid."""
+    import time
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_cache_") as tmp:
+        cache = os.path.join(tmp, "cache")
+        args = lambda i: ["voxelize", CORNELL, "-o", os.path.join(tmp, "g%d.vdb" % i), "--cache", cache,
+                          "--grid", "320", "--voxelizer", "cpu"]
+        procs = []
+        for i in range(4):
+            procs.append(subprocess.Popen([RAYSPLAT, *args(i)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                          text=True, errors="replace"))
+            if i == 1:
+                time.sleep(0.4)
+        for i, p in enumerate(procs):
+            _, err = p.communicate(timeout=120)
+            check(p.returncode == 0, "writer %d: exit %d: %r" % (i, p.returncode, err))
+            check("warning" not in err, "writer %d warned: %r" % (i, err))
+        left = sorted(os.listdir(cache))
+        check(len(left) == 1 and left[0].endswith(".vdb") and not left[0].startswith("."),
+              "the cache folder holds %s, expected one .vdb" % left)
+        r = run(*args(9))
+        check(r.returncode == 0 and "from the cache" in r.stderr, "a later run did not read the cache: %r" % r.stderr)
+        with open(os.path.join(tmp, "g0.vdb"), "rb") as a, open(os.path.join(tmp, "g9.vdb"), "rb") as b:
+            check(len(a.read()) == len(b.read()), "the grid read from the cache differs in size from the one made")
+
+
 # -- Interrupted renders ---------------------------------------------------------------------
 
 
@@ -504,6 +533,7 @@ def main():
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,
             test_repeated_warnings_collapse,
+            test_cache_under_concurrent_writers,
             test_no_arguments_prints_usage_and_exits_2,
             test_help_of_each_command,
             test_good_render_writes_exr_png_and_stats,
