@@ -133,78 +133,76 @@ private:
 
 }  // namespace
 
-void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
-                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
-                  Reporter& reporter, SplatStats* statsOut) {
-    const GridGeometry& g = tree.geometry;
-    const size_t pixels = film.pixelCount();
-    const int threads = pool.size();
-    std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
-    std::vector<TraversalScratch> scratch(threads);
-    std::vector<SplatStats> stats(threads);
-    const int64_t n = int64_t(photons.rays.size());
-    const std::vector<uint32_t> order = coherentOrder(photons, g);
+namespace {
 
-    reporter.begin("splatting", n, "photons");
-    pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
-        std::vector<int64_t>& buf = acc[thread];
-        if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
-        SplatStats& st = stats[thread];
-        for (int64_t p = b; p < e; ++p) {
-            const PhotonRay& ray = photons.rays[order[size_t(p)]];
-            const float h = ray.radius, h2 = h * h;
-            const Vec3 o = ray.origin, w = ray.dir;
-            Cylinder cyl;
-            cyl.origin = g.voxelFromWorld(o);
-            cyl.dir = w;
-            cyl.radius = h / g.voxelSize;
-            const float end = ray.length + h * ray.reach;  // past the hit as far as the kernel lands
-            cyl.length = end / g.voxelSize;
-            // The traversal leaves out samples behind the origin's tangent plane (rule 1), unless
-            // there is no visibility at all.
-            cyl.originNormal = ray.originNormal && settings.visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
-            int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
-            const SegmentReceivers receivers(accel, ray);
-            PendingContributions pending(receivers, st);
+// One photon ray's cylinder (voxel space): it reaches past the hit as far as the kernel lands;
+// with visibility it leaves out the samples behind the origin's tangent plane (rule 1).
+Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility) {
+    Cylinder cyl;
+    cyl.origin = g.voxelFromWorld(ray.origin);
+    cyl.dir = ray.dir;
+    cyl.radius = ray.radius / g.voxelSize;
+    cyl.length = (ray.length + ray.radius * ray.reach) / g.voxelSize;
+    cyl.originNormal = ray.originNormal && visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
+    return cyl;
+}
 
-            traverseCylinder(tree, samples, cyl, scratch[thread], [&](uint32_t i, float visibility) {
-                // Only samples in front of the ray's origin, inside the kernel, facing the photon.
-                Vec3 y = samples.position[i];
-                Vec3 oy = y - o;
-                float t = glm::dot(oy, w);
-                if (t <= 0.f || t > end) return;
-                float d2 = glm::dot(oy, oy) - t * t;
-                if (d2 >= h2) return;
-                Vec3 n = decodeUnit16(samples.normal[i]);
-                float cosTheta = glm::dot(n, w);
-                if (cosTheta >= 0.f) return;
-                Vec3 ng = decodeUnit16(samples.geomNormal[i]);
-                if (glm::dot(ng, w) >= 0.f) return;
-                if (settings.visibility && !receivers.inFrontOfOrigin(y)) {
-                    ++st.refused[SegmentReceivers::kBehindOrigin];
-                    return;
-                }
+// What one photon ray gives each eye sample the traversal hands it: equation (2), after the
+// kernel, orientation and receiver tests, into the thread's fixed-point buffer of its class.
+class PhotonSplat {
+public:
+    PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, bool visibility,
+                int64_t* layer, SplatStats& stats)
+        : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), end_(ray.length + ray.radius * ray.reach),
+          visibility_(visibility), layer_(layer), stats_(stats), receivers_(accel, ray), pending_(receivers_, stats) {}
 
-                // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
-                Vec3 f = samples.weightedF(i, n, -w, -cosTheta);
-                float scale = biweightKernel(std::max(d2, 0.f), h2) * -cosTheta * visibility;
-                Vec3 c = f * ray.flux * scale;
-                if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
-                int64_t* px = &layer[size_t(samples.pixel[i]) * 3];
-                if (settings.visibility) {
-                    pending.add(y, ng, px, c);
-                } else {
-                    PendingContributions::addFixed(px, c);
-                    ++st.contributions;
-                }
-            }, &st.traversal);
-            pending.flush();
+    void receive(uint32_t i, float visibility) {
+        // Only samples in front of the ray's origin, inside the kernel, facing the photon.
+        const Vec3 w = ray_.dir;
+        const Vec3 y = samples_.position[i];
+        const Vec3 oy = y - ray_.origin;
+        const float t = glm::dot(oy, w);
+        if (t <= 0.f || t > end_) return;
+        const float d2 = glm::dot(oy, oy) - t * t;
+        if (d2 >= h2_) return;
+        const Vec3 n = decodeUnit16(samples_.normal[i]);
+        const float cosTheta = glm::dot(n, w);
+        if (cosTheta >= 0.f) return;
+        const Vec3 ng = decodeUnit16(samples_.geomNormal[i]);
+        if (glm::dot(ng, w) >= 0.f) return;
+        if (visibility_ && !receivers_.inFrontOfOrigin(y)) {
+            ++stats_.refused[SegmentReceivers::kBehindOrigin];
+            return;
         }
-        reporter.advance(e - b);
-    });
-    reporter.end();
+        // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
+        const Vec3 f = samples_.weightedF(i, n, -w, -cosTheta);
+        const float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
+        const Vec3 c = f * ray_.flux * scale;
+        if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
+        int64_t* px = &layer_[size_t(samples_.pixel[i]) * 3];
+        if (visibility_) {
+            pending_.add(y, ng, px, c);  // rule 2 decides, a packet at a time
+        } else {
+            PendingContributions::addFixed(px, c);
+            ++stats_.contributions;
+        }
+    }
+    void finish() { pending_.flush(); }
 
-    // Sum the threads' buffers (integers: any order gives the same sum) into the film.
+private:
+    const EyeSamples& samples_;
+    const PhotonRay& ray_;
+    const float h2_, end_;
+    const bool visibility_;
+    int64_t* layer_;
+    SplatStats& stats_;
+    const SegmentReceivers receivers_;
+    PendingContributions pending_;
+};
+
+// Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
+void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, Film& film) {
+    const size_t pixels = film.pixelCount();
     for (int l = 0; l < kSplatLayers; ++l) {
         for (size_t px = 0; px < pixels; ++px) {
             int64_t sum[3] = {0, 0, 0};
@@ -216,6 +214,37 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                                        float(double(sum[2]) / kFixedScale));
         }
     }
+}
+
+}  // namespace
+
+void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
+                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  Reporter& reporter, SplatStats* statsOut) {
+    const size_t pixels = film.pixelCount();
+    const int threads = pool.size();
+    std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
+    std::vector<TraversalScratch> scratch(threads);
+    std::vector<SplatStats> stats(threads);
+    const int64_t n = int64_t(photons.rays.size());
+    const std::vector<uint32_t> order = coherentOrder(photons, tree.geometry);
+
+    reporter.begin("splatting", n, "photons");
+    pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
+        std::vector<int64_t>& buf = acc[thread];
+        if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
+        for (int64_t p = b; p < e; ++p) {
+            const PhotonRay& ray = photons.rays[order[size_t(p)]];
+            PhotonSplat splat(accel, samples, ray, settings.visibility, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
+            traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
+                             [&](uint32_t i, float visibility) { splat.receive(i, visibility); },
+                             &stats[thread].traversal);
+            splat.finish();
+        }
+        reporter.advance(e - b);
+    });
+    reporter.end();
+    addThreadBuffers(acc, film);
     if (statsOut)
         for (const SplatStats& s : stats) statsOut->add(s);
 }
