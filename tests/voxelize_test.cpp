@@ -293,6 +293,18 @@ TEST(VoxelizeGpu, MatchesCpuOnDataScenes) {
     EXPECT_GT(scenes, 0);
 }
 
+// The Bitterli teapot at 256³ (RAYSPLAT_EXTRA_SCENES names a folder holding
+// bitterli-teapot/teapot.glb; skipped without it): scripts/device_check.sh runs it on a GPU.
+TEST(VoxelizeGpu, MatchesCpuOnTheTeapot) {
+    SKIP_WITHOUT_GPU();
+    const char* extra = std::getenv("RAYSPLAT_EXTRA_SCENES");
+    if (!extra || !*extra) GTEST_SKIP() << "RAYSPLAT_EXTRA_SCENES is not set";
+    const std::string path = std::string(extra) + "/bitterli-teapot/teapot.glb";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent";
+    Scene s = loadScene(path, silentReporter());
+    expectAgreement(s, gridForBounds(s.bounds, 256), "teapot");
+}
+
 TEST(VoxelizeGpu, MatchesCpuOnRandomSoups) {
     SKIP_WITHOUT_GPU();
     // 70 slices along y: two intervals (64 + 6).
