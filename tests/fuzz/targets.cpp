@@ -1,0 +1,54 @@
+#include "targets.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "grid/vdb_io.h"
+#include "scene/scene.h"
+
+namespace rs::fuzz {
+
+namespace {
+
+// The readers take paths: each input goes to a file of this process's own in /tmp.
+std::string writeInput(const char* extension, const uint8_t* data, size_t size) {
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("raysplat_fuzz_" + std::to_string(getpid()) + extension)).string();
+    std::ofstream f(path, std::ios::binary | std::ios::trunc);
+    f.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+    return path;
+}
+
+}  // namespace
+
+void loadGltf(const uint8_t* data, size_t size) {
+    if (size == 0) return;
+    const std::string path = writeInput(data[0] % 2 ? ".glb" : ".gltf", data + 1, size - 1);
+    try {
+        loadScene(path, silentReporter());
+    } catch (const Error&) {
+    }
+    std::remove(path.c_str());
+}
+
+void readVdbFile(const uint8_t* data, size_t size) {
+    const std::string path = writeInput(".vdb", data, size);
+    try {
+        readVdb(path);
+    } catch (const Error&) {
+    }
+    std::remove(path.c_str());
+}
+
+Target targetNamed(const std::string& name) {
+    if (name == "gltf") return loadGltf;
+    if (name == "vdb") return readVdbFile;
+    return nullptr;
+}
+
+}  // namespace rs::fuzz
