@@ -217,7 +217,7 @@ private:
         if (brick.divided())
             for (int k = 1; k < 8; ++k) brick.octantStart[k - 1] = uint16_t(start[k]);
         order_.resize(order_.size() + brick.sampleCount);
-        uint32_t* out = &order_[brick.firstSample];
+        uint32_t* out = order_.data() + brick.firstSample;  // (no element when the brick has no samples)
         for (auto it = from; it != to; ++it) {
             const uint32_t i = uint32_t(*it & 0xffffffffu);
             out[brick.divided() ? start[octant_[i]]++ : uint32_t(it - from)] = i;
