@@ -271,6 +271,35 @@ TEST(VdbFile, TruncatedFilesAreIoErrorsNamingThem) {
     }
 }
 
+// The cache's files carry a checksum that is checked before OpenVDB reads them: any flipped
+// byte is a clean Io error, even one OpenVDB would have parsed (or allocated exabytes for:
+// tests/fuzz/regressions/vdb/found_blosc_length_7_exabytes.vdb).
+TEST(VdbFile, CacheFilesWithAnyChangedByteAreRefusedByTheirChecksum) {
+    TempDir dir;
+    const std::string good = dir.file("good.vdb");
+    writeCacheVdb(good, randomGrid(4), someMetadata());
+    EXPECT_EQ(readCacheVdb(good).grid.counts, readVdb(good).grid.counts) << "still a VDB to OpenVDB";
+    const std::string bytes = readBytes(good);
+    std::mt19937 rng(11);
+    for (int k = 0; k < 40; ++k) {
+        std::string changed = bytes;
+        const size_t at = rng() % changed.size();
+        changed[at] = char(changed[at] ^ (1 + rng() % 255));
+        const std::string path = dir.file("changed.vdb");
+        writeBytes(path, changed);
+        try {
+            readCacheVdb(path);
+            ADD_FAILURE() << "byte " << at << " changed, and the cache file was accepted";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), ErrorKind::Io);
+            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+        }
+    }
+    const std::string plain = dir.file("plain.vdb");
+    writeVdb(plain, randomGrid(4), someMetadata());
+    EXPECT_THROW(readCacheVdb(plain), Error) << "a VDB without the trailer is not a cache file";
+}
+
 TEST(VdbFile, RandomBytesAndForeignFilesAreIoErrors) {
     TempDir dir;
     std::mt19937 rng(5);
@@ -376,7 +405,7 @@ TEST(GridCache, StaleFileUnderTheKeyIsRecomputedWithAWarning) {
     meta.cacheKey = otherKey;
     meta.voxelizer = "cpu";
     std::string path = cachePath(cfg.cacheDir, key);
-    writeVdb(path, reference(other, cfg.grid), meta);
+    writeCacheVdb(path, reference(other, cfg.grid), meta);
 
     ThreadPool pool(2);
     RecordingReporter reporter;
@@ -402,7 +431,7 @@ TEST(GridCache, TamperedGeometryMetadataIsRecomputedWithAWarning) {
     meta.cacheKey = key;
     meta.voxelizer = "cpu";
     std::string path = cachePath(cfg.cacheDir, key);
-    writeVdb(path, shifted, meta);
+    writeCacheVdb(path, shifted, meta);
 
     ThreadPool pool(2);
     RecordingReporter reporter;

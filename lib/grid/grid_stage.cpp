@@ -28,7 +28,7 @@ bool loadCached(const std::string& path, const std::string& key, const GridGeome
     if (!std::filesystem::exists(path, ec)) return false;
     VdbFile cached;
     try {
-        cached = readVdb(path);
+        cached = readCacheVdb(path);
     } catch (const Error& e) {
         reporter.warn(std::string(e.what()) + "; voxelizing again and replacing the cache file");
         return false;
@@ -107,7 +107,7 @@ OcclusionGrid buildGrid(const Scene& scene, const GridSettings& cfg, ThreadPool&
             try {
                 std::error_code ec;
                 std::filesystem::create_directories(cfg.cacheDir, ec);
-                writeVdb(path, grid, meta);
+                writeCacheVdb(path, grid, meta);
             } catch (const Error& e) {
                 reporter.warn(std::string(e.what()) + " (the voxel cache is not updated)");
             }

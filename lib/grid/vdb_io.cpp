@@ -23,6 +23,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <algorithm>
+#include <vector>
 #include <fstream>
 #include <mutex>
 
@@ -107,6 +109,58 @@ void writeVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetad
     StagedFiles out;
     writeVdbTo(out.stage(path), path, grid, metadata);
     out.commit();
+}
+
+namespace {
+
+constexpr char kTrailerMagic[8] = {'R', 'S', 'V', 'D', 'B', 'S', 'U', 'M'};
+
+// FNV-1a over the first `bytes` bytes of a file, read in blocks.
+uint64_t hashFilePrefix(std::ifstream& in, uint64_t bytes) {
+    uint64_t h = 0xcbf29ce484222325ull;
+    std::vector<char> block(1 << 20);
+    while (bytes > 0) {
+        const size_t n = size_t(std::min<uint64_t>(bytes, block.size()));
+        if (!in.read(block.data(), std::streamsize(n))) return ~h;
+        for (size_t i = 0; i < n; ++i) h = (h ^ uint8_t(block[i])) * 0x100000001b3ull;
+        bytes -= n;
+    }
+    return h;
+}
+
+}  // namespace
+
+void writeCacheVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetadata& metadata) {
+    StagedFiles out;
+    const std::string tmp = out.stage(path);
+    writeVdbTo(tmp, path, grid, metadata);
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(tmp, ec);
+    std::ifstream in(tmp, std::ios::binary);
+    if (ec || !in) throw Error(ErrorKind::Io, path + ": cannot write the cache file's checksum");
+    const uint64_t hash = hashFilePrefix(in, size);
+    in.close();
+    std::ofstream app(tmp, std::ios::binary | std::ios::app);
+    app.write(kTrailerMagic, sizeof kTrailerMagic);
+    app.write(reinterpret_cast<const char*>(&hash), sizeof hash);
+    app.close();
+    if (!app) throw Error(ErrorKind::Io, path + ": cannot write the cache file's checksum");
+    out.commit();
+}
+
+VdbFile readCacheVdb(const std::string& path) {
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw Error(ErrorKind::Io, path + ": cannot read occlusion grid: no such file");
+    std::ifstream in(path, std::ios::binary);
+    char magic[sizeof kTrailerMagic] = {};
+    uint64_t stored = 0;
+    if (size >= 16 && in.seekg(std::streamoff(size - 16)) && in.read(magic, sizeof magic) &&
+        in.read(reinterpret_cast<char*>(&stored), sizeof stored) &&
+        std::equal(magic, magic + sizeof magic, kTrailerMagic) && in.seekg(0) &&
+        hashFilePrefix(in, size - 16) == stored)
+        return readVdb(path);
+    throw Error(ErrorKind::Io, path + ": not a whole cache file (no checksum, or it does not match its bytes)");
 }
 
 void writeVdbTo(const std::string& tmp, const std::string& path, const OcclusionGrid& grid,

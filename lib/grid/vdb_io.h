@@ -61,7 +61,16 @@ void writeVdbTo(const std::string& file, const std::string& path, const Occlusio
 
 // Reads a file written by writeVdb. Throws Error(Io) with a one-line message naming the file
 // when it is missing, truncated, corrupt, of another format version, or not a raysplat grid.
+// OpenVDB trusts the lengths in the file: a corrupt one can ask for an absurd allocation
+// (std::bad_alloc, reported as a corrupt file).
 VdbFile readVdb(const std::string& path);
+
+// The voxel cache's files: a VDB followed by a 16-byte trailer ("RSVDBSUM" and a 64-bit
+// FNV-1a hash of every byte before it; OpenVDB ignores what follows its grids, so the file
+// still opens in Blender). readCacheVdb checks the trailer before OpenVDB reads a byte, so a
+// truncated or corrupted cache file is a clean Error, never OpenVDB parsing garbage.
+void writeCacheVdb(const std::string& path, const OcclusionGrid& grid, const VdbMetadata& metadata);
+VdbFile readCacheVdb(const std::string& path);
 
 // The cache key: a 64-bit hash (16 hex digits) over the triangle positions' bit patterns,
 // the grid resolution, the voxelizer kind and supersampling, and kVdbFormatVersion. Any

@@ -39,7 +39,7 @@ void loadGltf(const uint8_t* data, size_t size) {
 void readVdbFile(const uint8_t* data, size_t size) {
     const std::string path = writeInput(".vdb", data, size);
     try {
-        readVdb(path);
+        readCacheVdb(path);
     } catch (const Error&) {
     }
     std::remove(path.c_str());

@@ -14,7 +14,7 @@ namespace rs::fuzz {
 // The first byte picks the form: even .gltf (JSON, buffers as data URIs or missing files),
 // odd .glb; the rest is the file.
 void loadGltf(const uint8_t* data, size_t size);
-// A .vdb file as the voxel cache would read it.
+// A .vdb file as the voxel cache reads it (checksum first, then OpenVDB).
 void readVdbFile(const uint8_t* data, size_t size);
 
 // The target of a name ("gltf", "vdb"), or nullptr.
