@@ -18,9 +18,9 @@ constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 // Per eye sample: 24 bytes and a 20-byte lobe at most, the eye pass's rows appended into one
 // array (twice), and the tree build's keys, flags, order and one permuted array.
 constexpr double kBytesPerEyeSample = 2 * (24 + 20) + 8 + 2 + 4 + 12;
-// Per pixel: the film's six RGB buffers (layers, albedo, normal) three times over (the sum of
-// the passes, a pass's film, the eye pass's).
-constexpr double kFilmBytesPerPixel = 3 * 6 * 12;
+// Per pixel: the passes' fixed-point sum (six RGB buffers of 8-byte integers: layers, albedo,
+// normal), a pass's float film, and one buffer's copy for a distributed render's reduction.
+constexpr double kFilmBytesPerPixel = 6 * 3 * 8 + 6 * 12 + 3 * 8;
 // Per pixel and thread: the splat's fixed-point accumulators (three layers × RGB × 8 bytes).
 constexpr double kSplatBytesPerPixelThread = 3 * 3 * 8;
 // Per triangle: the scene's vertex data and Embree's BVH (high quality, robust).

@@ -10,6 +10,7 @@
 
 #include <cstdio>
 
+#include "core/error.h"
 #include "scene/accel.h"
 #include "splat/eye.h"
 #include "grid/grid_stage.h"
@@ -18,6 +19,7 @@
 #include "core/parallel.h"
 #include "core/stop.h"
 #include "memory.h"
+#include "ranks.h"
 #include "path/path.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
@@ -29,6 +31,11 @@
 namespace rs {
 
 const char* versionString() { return RAYSPLAT_VERSION; }
+
+Ranks& singleProcess() {
+    static Ranks one;
+    return one;
+}
 
 namespace {
 
@@ -47,7 +54,16 @@ struct RenderContext {
     ThreadPool& pool;
     Reporter& reporter;
     Stats& stats;
+    Ranks& ranks;
 };
+
+// Every rank's figures agree, or this throws: another rank failed and says why.
+bool agreeOrStop(Ranks& ranks, bool more) {
+    const Ranks::Agreement a = ranks.agree(true, more);
+    if (a.failedRank >= 0)
+        throw Error(ErrorKind::OtherRank, "rank " + std::to_string(a.failedRank) + " failed");
+    return a.more;
+}
 
 // -- The stages' settings, from the RenderConfig (here only) ----------------------------------
 
@@ -93,32 +109,48 @@ SplatSettings splatSettings(const RenderConfig& cfg) {
 
 // -- Passes -------------------------------------------------------------------------------------
 
+// What one rank renders of one pass: share `share` of `shares` equal parts of its photons
+// (splat) or rows (path); the eye pass's own light (emission, sampled direct light, albedo,
+// normal) comes from share 0 alone.
+struct PassShare {
+    int pass = 0;
+    int share = 0, shares = 1;
+};
+
 // Progressive rendering: cfg.passCount() passes, or with a time limit as many as fit (at least
-// one), averaged with equal weights. Each pass reports as one unit of the "rendering"
-// progress when there is more than one.
+// one), averaged with equal weights, summed in fixed point. With several ranks
+// (docs/design.md §11) passes go round by round, one pass a rank, pass p to rank p mod N; with
+// fewer passes than ranks every rank renders a share of every pass. After each round the
+// ranks agree: on errors, and (rank 0's clock) on whether another round fits the time limit.
 template <class RenderPass>
 Film renderPasses(const RenderContext& c, RenderPass&& pass) {
     Timer t;
-    Film sum(c.width, c.height);
+    FixedFilm sum(c.width, c.height);
     const bool timed = c.cfg.timeLimit > 0.0;
     const int wanted = c.cfg.passCount();
+    const int ranks = c.ranks.size(), me = c.ranks.rank();
+    const bool shared = !timed && wanted < ranks;
     const bool several = timed || wanted > 1;
     if (several) c.reporter.begin("rendering", timed ? 0 : wanted, "passes");
     int passes = 0;
     double longest = 0.0;
-    for (;;) {
+    for (bool more = true; more;) {
         throwIfStopped();
+        const int round = shared ? 1 : timed ? ranks : std::min(ranks, wanted - passes);
         Timer one;
-        sum.add(pass(passes));
-        ++passes;
+        if (shared)
+            pass(PassShare{passes, me, ranks}, sum);
+        else if (me < round)
+            pass(PassShare{passes + me, 0, 1}, sum);
+        passes += round;
         longest = std::max(longest, one.seconds());
-        if (several) c.reporter.advance(1);
-        if (timed ? t.seconds() + longest > c.cfg.timeLimit : passes >= wanted) break;
+        if (several) c.reporter.advance(round);
+        more = agreeOrStop(c.ranks, timed ? t.seconds() + longest <= c.cfg.timeLimit : passes < wanted);
     }
     if (several) c.reporter.end();
-    sum.scale(1.f / float(passes));
+    for (std::vector<int64_t>& buffer : sum.buffers) c.ranks.sumAtRoot(buffer);
     c.stats.setCount("passes", passes);
-    return sum;
+    return sum.average(passes);
 }
 
 // The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …
@@ -133,10 +165,12 @@ Film renderPath(const RenderContext& c) {
     const int spp = ps.spp;
     int passes = 0;
     Timer t;
-    Film film = renderPasses(c, [&](int pass) {
-        passes = pass + 1;
-        ps.firstSample = pass * spp;
-        return renderPathPass(c.scene, c.accel, c.lights, c.camera, ps, c.pool, c.reporter);
+    Film film = renderPasses(c, [&](const PassShare& share, FixedFilm& sum) {
+        passes = std::max(passes, share.pass + 1);
+        ps.firstSample = share.pass * spp;
+        ps.rowBegin = c.height * share.share / share.shares;
+        ps.rowEnd = c.height * (share.share + 1) / share.shares;
+        sum.add(renderPathPass(c.scene, c.accel, c.lights, c.camera, ps, c.pool, c.reporter));
     });
     c.stats.addTime("render", t.seconds());
     c.stats.setCount("samples_per_pixel", double(passes) * spp);
@@ -159,12 +193,13 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     if (c.cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
     EyePassSettings es = eyePassSettings(c);
     PhotonSettings ps = photonSettings(c.cfg, grid.geometry.voxelSize);
-    const SplatSettings splat = splatSettings(c.cfg);
+    SplatSettings splat = splatSettings(c.cfg);
     SplatTotals totals;
 
     // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
     // new photons (a fresh range of paths) with shrunk kernels, splatted (docs/design.md §4, §7–9).
-    return renderPasses(c, [&](int pass) {
+    return renderPasses(c, [&](const PassShare& share, FixedFilm& sum) {
+        const int pass = share.pass;
         Timer t;
         es.firstSample = pass * es.spp;
         EyePass eye = traceEyePass(c.scene, c.accel, &c.lights, c.camera, es, c.pool, c.reporter);
@@ -190,22 +225,24 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         totals.photonsStored += int64_t(photons.rays.size());
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
-        // The light lands in the eye pass's film: emission, albedo, normal and (sampled)
-        // direct light are already there.
+        // The eye pass's own light (emission, albedo, normal, sampled direct light), then the
+        // photons' (this rank's share of them).
         t = Timer();
-        splatPhotons(c.accel, tree, eye.samples, photons, splat, eye.film, c.pool, c.reporter, &totals.splat);
+        if (share.share == 0) sum.add(eye.film);
+        splat.share = share.share;
+        splat.shares = share.shares;
+        splatPhotons(c.accel, tree, eye.samples, photons, splat, sum, c.pool, c.reporter, &totals.splat);
         stats.addTime("splat", t.seconds());
         stats.setCount("photon_mb", totals.photonMb);
         stats.setCount("photons_stored", double(totals.photonsStored));
         stats.setCount("radius_scale", ps.radiusScale);
         totals.splat.report(stats);
-        return std::move(eye.film);
     });
 }
 
 }  // namespace
 
-RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter) {
+RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks) {
     cfg.validate();
     RenderResult result;
     Stats& stats = result.stats;
@@ -221,9 +258,11 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), width, height, threads);
     checkMemory(memory, cfg.maxMemory);
     stats.setCount("memory_estimate_mb", memory.total() / kMB);
+    agreeOrStop(ranks, false);  // every rank got this far: the scene loaded and fits
 
     ThreadPool pool(cfg.threads);
     stats.setCount("threads", pool.size());
+    stats.setCount("ranks", ranks.size());
     stats.setCount("triangles", double(scene.triangleCount()));
     stats.setCount("width", width);
     stats.setCount("height", height);
@@ -235,7 +274,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     stats.addTime("bvh", t.seconds());
     if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights: the image will be black");
 
-    const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats};
+    const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats, ranks};
     if (cfg.splats()) {
         result.film = renderSplat(context, result.outputs.get());
     } else {

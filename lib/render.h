@@ -7,6 +7,7 @@
 #include "output/staged_files.h"
 #include "output/film.h"
 #include "core/log.h"
+#include "ranks.h"
 #include "scene/scene.h"
 #include "core/stats.h"
 
@@ -21,7 +22,9 @@ struct RenderResult {
     std::shared_ptr<StagedFiles> outputs = std::make_shared<StagedFiles>();
 };
 
-RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter);
+// With several ranks (an MPI job, lib/ranks.h) every rank calls it alike; rank 0's result holds
+// the image, the others' film is partial.
+RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks = singleProcess());
 
 // EXR (+ PNG, + stats JSON) as the config asks, each written atomically.
 void writeOutputs(RenderResult& result, const RenderConfig& cfg);

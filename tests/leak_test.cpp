@@ -54,8 +54,9 @@ std::vector<float> splatOne(const WallScene& w, const PhotonRay& ray, const std:
     OcclusionTree tree = buildOcclusionTree(occ, eye, pool);  // reorders eye, pixels stay
     PhotonMap map;
     map.rays.push_back(ray);
-    Film film(int(at.size()), 1);
-    splatPhotons(accel, tree, eye, map, SplatSettings(), film, pool, silentReporter());
+    FixedFilm sum(int(at.size()), 1);
+    splatPhotons(accel, tree, eye, map, SplatSettings(), sum, pool, silentReporter());
+    const Film film = sum.average(1);
     std::vector<float> got;
     for (size_t i = 0; i < at.size(); ++i) got.push_back(film.layers[ray.cls][i].x);
     return got;

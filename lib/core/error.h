@@ -9,7 +9,8 @@
 
 namespace rs {
 
-enum class ErrorKind { Io, Scene, Config, Gpu, Embree, Internal, Interrupted };
+// OtherRank: another rank of a distributed render failed and said why (lib/ranks.h).
+enum class ErrorKind { Io, Scene, Config, Gpu, Embree, Internal, Interrupted, OtherRank };
 
 class Error : public std::runtime_error {
 public:

@@ -1,6 +1,9 @@
 // Film buffers and the relative MSE between images.
 #include "output/film.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/error.h"
 
 namespace rs {
@@ -28,21 +31,47 @@ std::vector<Vec3> Film::beautyImage() const {
     return out;
 }
 
-void Film::add(const Film& o) {
-    RS_CHECK(o.width == width && o.height == height);
-    for (int l = 0; l < kLayerCount; ++l)
-        for (size_t i = 0; i < pixelCount(); ++i) layers[l][i] += o.layers[l][i];
-    for (size_t i = 0; i < pixelCount(); ++i) {
-        albedo[i] += o.albedo[i];
-        normal[i] += o.normal[i];
+FixedFilm::FixedFilm(int w, int h) : width(w), height(h) {
+    for (auto& b : buffers) b.assign(pixelCount() * 3, 0);
+}
+
+int64_t FixedFilm::toFixed(float v) {
+    constexpr double kLimit = 1073741824.0;  // 2^30: two such values add without overflow
+    const double x = std::clamp(double(v), -kLimit, kLimit) * kScale;
+    return v == v ? std::llround(x) : 0;  // a NaN adds nothing
+}
+
+void FixedFilm::addSaturating(int64_t& sum, int64_t v) {
+    if (__builtin_add_overflow(sum, v, &sum)) sum = v > 0 ? INT64_MAX : INT64_MIN;
+}
+
+void FixedFilm::add(const Film& film) {
+    RS_CHECK(film.width == width && film.height == height);
+    for (int b = 0; b < kBuffers; ++b) {
+        const std::vector<Vec3>& from = b < kLayerCount ? film.layers[b] : b == kLayerCount ? film.albedo : film.normal;
+        int64_t* to = buffers[b].data();
+        for (size_t i = 0; i < from.size(); ++i)
+            for (int c = 0; c < 3; ++c) addSaturating(to[i * 3 + c], toFixed(from[i][c]));
     }
 }
 
-void Film::scale(float s) {
-    for (auto& l : layers)
-        for (Vec3& v : l) v *= s;
-    for (Vec3& v : albedo) v *= s;
-    for (Vec3& v : normal) v *= s;
+void FixedFilm::add(const FixedFilm& other) {
+    RS_CHECK(other.width == width && other.height == height);
+    for (int b = 0; b < kBuffers; ++b)
+        for (size_t i = 0; i < buffers[b].size(); ++i) addSaturating(buffers[b][i], other.buffers[b][i]);
+}
+
+Film FixedFilm::average(int passes) const {
+    Film film(width, height);
+    const double scale = 1.0 / (kScale * double(std::max(passes, 1)));
+    for (int b = 0; b < kBuffers; ++b) {
+        std::vector<Vec3>& to = b < kLayerCount ? film.layers[b] : b == kLayerCount ? film.albedo : film.normal;
+        const int64_t* from = buffers[b].data();
+        for (size_t i = 0; i < to.size(); ++i)
+            to[i] = Vec3(float(double(from[i * 3]) * scale), float(double(from[i * 3 + 1]) * scale),
+                         float(double(from[i * 3 + 2]) * scale));
+    }
+    return film;
 }
 
 double relativeMse(const std::vector<Vec3>& a, const std::vector<Vec3>& ref) {

@@ -3,6 +3,7 @@
 // Raster space: pixel (x, y) covers [x, x+1) × [y, y+1), y down, centre at +0.5.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,28 @@ struct Film {
     size_t pixelCount() const { return size_t(width) * height; }
     Vec3 beauty(size_t i) const;
     std::vector<Vec3> beautyImage() const;
-    void add(const Film& other);  // pixelwise sum of every buffer
-    void scale(float s);
+};
+
+// The sum of a render's passes, in 64-bit fixed point (2^-32 resolution; a pixel's sum saturates
+// at ±2^31): integer sums do not depend on their order, so passes, threads and the
+// ranks of a distributed render (docs/design.md §11) can add their parts in any order and
+// the image is the same to the bit.
+struct FixedFilm {
+    static constexpr double kScale = 4294967296.0;  // 2^32
+    int width = 0, height = 0;
+    // Per buffer (the layers, then albedo, then normal): pixel × rgb.
+    static constexpr int kBuffers = kLayerCount + 2;
+    std::vector<int64_t> buffers[kBuffers];
+
+    FixedFilm() = default;
+    FixedFilm(int w, int h);
+    size_t pixelCount() const { return size_t(width) * height; }
+    static int64_t toFixed(float v);
+    static void addSaturating(int64_t& sum, int64_t v);
+    void add(const FixedFilm& other);
+    void add(const Film& film);  // every buffer of `film`, pixelwise
+    // The average of `passes` passes, as a float film.
+    Film average(int passes) const;
 };
 
 // Relative MSE of `a` against the reference `ref`, per channel: mean of (a − r)² / (r² + ε),

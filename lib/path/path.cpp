@@ -1,5 +1,7 @@
 #include "path/path.h"
 
+#include <algorithm>
+
 #include "scene/bsdf.h"
 #include "scene/camera.h"
 #include "scene/direct.h"
@@ -106,9 +108,11 @@ Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSample
     Film film(width, height);
     CameraRays rays(camera, width, height);
     const float invSpp = 1.f / float(pass.spp);
-    reporter.begin("path tracing", height, "rows");
-    pool.parallelFor(height, 1, [&](int64_t y0, int64_t y1, int) {
-        for (int64_t y = y0; y < y1; ++y) {
+    const int rowBegin = std::clamp(pass.rowBegin, 0, height);
+    const int rowEnd = pass.rowEnd > 0 ? std::clamp(pass.rowEnd, rowBegin, height) : height;
+    reporter.begin("path tracing", rowEnd - rowBegin, "rows");
+    pool.parallelFor(rowEnd - rowBegin, 1, [&](int64_t y0, int64_t y1, int) {
+        for (int64_t y = rowBegin + y0; y < rowBegin + y1; ++y) {
             for (int x = 0; x < width; ++x) {
                 size_t pixel = size_t(y) * width + x;
                 uint64_t scramble = hashKey(pass.seed, Stage::Camera, pixel);

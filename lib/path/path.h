@@ -21,6 +21,7 @@ struct PathSettings {
     int spp = 16;
     int maxDepth = kDefaultMaxDepth;
     uint64_t seed = 0;
+    int rowBegin = 0, rowEnd = 0;  // the rows to render (0, 0: all); the others stay black
 };
 
 // Renders one pass; the film holds the average over the pass's samples. Layers split the

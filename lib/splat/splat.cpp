@@ -1,6 +1,6 @@
 // The splat stage. Photon rays are processed in chunks on the thread pool; each thread
-// accumulates into its own fixed-point buffer (2^-32 resolution, 2^31 range per pixel and
-// channel); the buffers are summed at the end. Integer addition is associative, so the image
+// accumulates into its own fixed-point buffer (the film's: 2^-32 resolution); the buffers are
+// summed into the render's fixed-point film at the end. Integer addition is associative, so the image
 // is bit-identical whatever the thread count or scheduling (determinism: docs/design.md §2).
 #include "splat/splat.h"
 
@@ -16,7 +16,7 @@ namespace rs {
 
 namespace {
 
-constexpr double kFixedScale = 4294967296.0;  // 2^32
+constexpr double kFixedScale = FixedFilm::kScale;
 constexpr int kSplatLayers = 3;               // direct, indirect, caustic = photon classes
 static_assert(int(kPhotonDirect) == int(kDirect) && int(kPhotonIndirect) == int(kIndirect) &&
                   int(kPhotonCaustic) == int(kCaustic),
@@ -201,17 +201,13 @@ private:
 };
 
 // Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
-void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, Film& film) {
-    const size_t pixels = film.pixelCount();
-    for (int l = 0; l < kSplatLayers; ++l) {
-        for (size_t px = 0; px < pixels; ++px) {
-            int64_t sum[3] = {0, 0, 0};
-            for (const std::vector<int64_t>& buf : acc) {
-                if (buf.empty()) continue;
-                for (int c = 0; c < 3; ++c) sum[c] += buf[(size_t(l) * pixels + px) * 3 + c];
-            }
-            film.layers[l][px] += Vec3(float(double(sum[0]) / kFixedScale), float(double(sum[1]) / kFixedScale),
-                                       float(double(sum[2]) / kFixedScale));
+void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, FixedFilm& film) {
+    for (const std::vector<int64_t>& buf : acc) {
+        if (buf.empty()) continue;
+        for (int l = 0; l < kSplatLayers; ++l) {
+            const int64_t* from = &buf[size_t(l) * film.pixelCount() * 3];
+            std::vector<int64_t>& to = film.buffers[l];
+            for (size_t i = 0; i < to.size(); ++i) FixedFilm::addSaturating(to[i], from[i]);
         }
     }
 }
@@ -219,21 +215,23 @@ void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, Film& film) 
 }  // namespace
 
 void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
-                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  const PhotonMap& photons, const SplatSettings& settings, FixedFilm& film, ThreadPool& pool,
                   Reporter& reporter, SplatStats* statsOut) {
     const size_t pixels = film.pixelCount();
     const int threads = pool.size();
     std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
     std::vector<TraversalScratch> scratch(threads);
     std::vector<SplatStats> stats(threads);
-    const int64_t n = int64_t(photons.rays.size());
     const std::vector<uint32_t> order = coherentOrder(photons, tree.geometry);
+    const int64_t chunks = (int64_t(photons.rays.size()) + SplatSettings::kChunk - 1) / SplatSettings::kChunk;
+    const int64_t first = std::min(int64_t(photons.rays.size()), chunks * settings.share / settings.shares * SplatSettings::kChunk);
+    const int64_t last = std::min(int64_t(photons.rays.size()), chunks * (settings.share + 1) / settings.shares * SplatSettings::kChunk);
 
-    reporter.begin("splatting", n, "photons");
-    pool.parallelFor(n, 256, [&](int64_t b, int64_t e, int thread) {
+    reporter.begin("splatting", last - first, "photons");
+    pool.parallelFor(last - first, SplatSettings::kChunk, [&](int64_t b, int64_t e, int thread) {
         std::vector<int64_t>& buf = acc[thread];
         if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
-        for (int64_t p = b; p < e; ++p) {
+        for (int64_t p = first + b; p < first + e; ++p) {
             const PhotonRay& ray = photons.rays[order[size_t(p)]];
             PhotonSplat splat(accel, samples, ray, settings.visibility, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
             traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],

@@ -67,13 +67,18 @@ struct SplatSettings {
     // The paper's method: the tree's mask and the receiver rules. Off for splat-novis, ray
     // splatting without visibility (the paper's Fig. 4b), whose tree holds no occluders.
     bool visibility = true;
+    // Of the pass's photons (in the splat's coherent order, whole chunks of kChunk), share
+    // `share` of `shares` equal parts: a distributed render's ranks split a pass this way
+    // (docs/design.md §11). The chunks are the same as in one process, so are the sums.
+    int share = 0, shares = 1;
+    static constexpr int64_t kChunk = 256;
 };
 
 // Adds the photons' light to `film` (direct, indirect and caustic layers; pixel = eye
 // sample's pixel index). The result does not depend on the thread count: contributions are
 // summed as 64-bit fixed-point integers, whose sum does not depend on order.
 void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
-                  const PhotonMap& photons, const SplatSettings& settings, Film& film, ThreadPool& pool,
+                  const PhotonMap& photons, const SplatSettings& settings, FixedFilm& film, ThreadPool& pool,
                   Reporter& reporter, SplatStats* stats = nullptr);
 
 }  // namespace rs
