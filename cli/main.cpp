@@ -11,6 +11,7 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -21,12 +22,15 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "memory.h"
+#include "mpi_ranks.h"
+#include "options.h"
 #include "render.h"
 #include "scene/scene.h"
 #include "core/stats.h"
 #include "core/stop.h"
 
 using namespace rs;
+using rs::cli::Command;
 
 namespace {
 
@@ -155,105 +159,6 @@ private:
     bool barShown_ = false;
 };
 
-// -- Arguments --------------------------------------------------------------------------------
-
-struct Option {
-    std::string name;  // "--spp"
-    std::string arg;   // "N", or "" for a switch
-    std::string help;
-    std::function<void(const std::string&)> set;
-    std::string shortName = "";  // "-o", or none
-};
-
-template <class T>
-T parseNumber(const std::string& flag, const std::string& s) {
-    T v{};
-    const char* end = s.data() + s.size();
-    auto [p, ec] = std::from_chars(s.data(), end, v);
-    if (ec != std::errc() || p != end || s.empty())
-        throw Error(ErrorKind::Config, flag + ": '" + s + "' is not a valid number");
-    return v;
-}
-
-float parseFloat(const std::string& flag, const std::string& s) {
-    char* end = nullptr;
-    float v = std::strtof(s.c_str(), &end);
-    if (s.empty() || *end != '\0' || !std::isfinite(v)) throw Error(ErrorKind::Config, flag + ": '" + s + "' is not a valid number");
-    return v;
-}
-
-// "8G", "512M", "64k" or bytes → bytes (binary units).
-uint64_t parseSize(const std::string& flag, const std::string& s) {
-    const char unit = s.empty() ? '\0' : char(std::toupper(static_cast<unsigned char>(s.back())));
-    const int shift = unit == 'K' ? 10 : unit == 'M' ? 20 : unit == 'G' ? 30 : unit == 'T' ? 40 : 0;
-    const double v = parseFloat(flag, shift ? s.substr(0, s.size() - 1) : s);
-    if (!(v > 0.0) || v * double(uint64_t(1) << shift) > 1e18)
-        throw Error(ErrorKind::Config, flag + " " + s + " is not a size (a positive number of bytes, or with K, M, G, T)");
-    return uint64_t(v * double(uint64_t(1) << shift));
-}
-
-// "a,b,c" → three numbers.
-void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out) {
-    float v[3];
-    size_t start = 0;
-    for (int i = 0; i < 3; ++i) {
-        size_t end = i < 2 ? s.find(',', start) : s.size();
-        if (end == std::string::npos) throw Error(ErrorKind::Config, flag + ": '" + s + "' is not three numbers a,b,c");
-        v[i] = parseFloat(flag, s.substr(start, end - start));
-        start = end + 1;
-    }
-    for (int i = 0; i < 3; ++i) out[i] = v[i];
-}
-
-class Command {
-public:
-    Command(std::string usage, std::string summary) : usage_(std::move(usage)), summary_(std::move(summary)) {}
-    void add(Option o) { options_.push_back(std::move(o)); }
-
-    // Returns the positional arguments; handles --help.
-    std::vector<std::string> parse(int argc, char** argv, int first, bool& helpShown) {
-        std::vector<std::string> positional;
-        helpShown = false;
-        for (int i = first; i < argc; ++i) {
-            std::string a = argv[i];
-            if (a == "-h" || a == "--help") { printHelp(); helpShown = true; return {}; }
-            if (a.size() > 1 && a[0] == '-' && !(a.size() > 1 && std::isdigit(static_cast<unsigned char>(a[1])))) {
-                std::string name = a, value;
-                bool inlineValue = false;
-                if (auto eq = a.find('='); eq != std::string::npos) { name = a.substr(0, eq); value = a.substr(eq + 1); inlineValue = true; }
-                const Option* o = find(name);
-                if (!o) throw Error(ErrorKind::Config, "unknown option '" + name + "' (see --help)");
-                if (!o->arg.empty() && !inlineValue) {
-                    if (i + 1 >= argc) throw Error(ErrorKind::Config, name + " needs a value: " + name + " " + o->arg);
-                    value = argv[++i];
-                }
-                o->set(value);
-            } else {
-                positional.push_back(a);
-            }
-        }
-        return positional;
-    }
-
-    void printHelp() const {
-        std::printf("usage: %s\n\n%s\n\noptions:\n", usage_.c_str(), summary_.c_str());
-        for (const Option& o : options_) {
-            std::string left = (o.shortName.empty() ? "" : o.shortName + ", ") + o.name + (o.arg.empty() ? "" : " " + o.arg);
-            std::printf("  %-22s %s\n", left.c_str(), o.help.c_str());
-        }
-        std::printf("  %-22s %s\n", "-h, --help", "show this help");
-    }
-
-private:
-    const Option* find(const std::string& name) const {
-        for (const Option& o : options_)
-            if (o.name == name || (!o.shortName.empty() && o.shortName == name)) return &o;
-        return nullptr;
-    }
-    std::string usage_, summary_;
-    std::vector<Option> options_;
-};
-
 const char* kTopHelp =
     "usage: raysplat <command> [options]\n"
     "\n"
@@ -279,97 +184,26 @@ std::string fmt(const char* f, ...) {
 
 std::string vec(const Vec3& v) { return fmt("(%.4g, %.4g, %.4g)", v.x + 0.f, v.y + 0.f, v.z + 0.f); }  // no "-0"
 
-// The occlusion grid's options, shared by render and voxelize.
-void addGridOptions(Command& cmd, RenderConfig& cfg) {
-    cmd.add({"--grid", "N", "occlusion grid: voxels along the scene's longest axis (default 192, 1..4096)",
-             [&](const std::string& v) { cfg.grid = parseNumber<int>("--grid", v); }});
-    cmd.add({"--voxelizer", "NAME", "auto (GPU via EGL, else CPU with a warning; default), gpu, cpu",
-             [&](const std::string& v) { cfg.voxelizer = v; }});
-    cmd.add({"--cache", "DIR", "voxel cache: reuse DIR/<key>.vdb when scene and settings match, else write it",
-             [&](const std::string& v) { cfg.cacheDir = v; }});
-    cmd.add({"--max-memory", "SIZE", "refuse settings whose estimated memory exceeds SIZE (e.g. 8G, 512M; default: "
-                                     "the memory available now)",
-             [&](const std::string& v) { cfg.maxMemory = parseSize("--max-memory", v); }});
-}
-
-int cmdRender(int argc, char** argv) {
-    RenderConfig cfg;
-    bool quiet = false;
-    Command cmd("raysplat render SCENE -o OUT.exr [options]",
-                "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
-                "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): GPU voxelization (EGL) once, then 8 passes of eye pass, occlusion tree,\n"
-                "photons and splatting, averaged, with kernels shrinking from pass to pass. Direct light is sampled\n"
-                "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
-                "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
-                "atomically: a failed run leaves no file behind.");
-    cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
-    cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
-    cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});
-    cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
-             [&](const std::string& v) { cfg.method = parseMethod(v); }});
-    cmd.add({"--width", "N", "image width in pixels (default 500; 0: from --height and the camera aspect)",
-             [&](const std::string& v) { cfg.width = parseNumber<int>("--width", v); }});
-    cmd.add({"--height", "N", "image height (default: from the width and the camera's aspect ratio)",
-             [&](const std::string& v) { cfg.height = parseNumber<int>("--height", v); }});
-    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat 4 eye samples, path 16)",
-             [&](const std::string& v) {
-                 cfg.spp = parseNumber<int>("--spp", v);
-                 if (cfg.spp < 1) throw Error(ErrorKind::Config, "--spp " + v + " is out of range (1..1048576)");
-             }});
-    cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
-             [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
-    cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 8)",
-             [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
-    cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",
-             [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});
-    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default 0,0.5,0.3; with --direct photons 0.2,0.5,0.3)",
-             [&](const std::string& v) {
-                 parseTriple("--split", v, cfg.split);
-                 cfg.splitSet = true;
-             }});
-    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,32,16)",
-             [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
-    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,6,1)",
-             [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
-    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default 16,24,16)",
-             [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
-    cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
-             [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
-    cmd.add({"--passes", "N", "passes to render and average (default: splat 8, each new eye samples and photons; path 1 of --spp)",
-             [&](const std::string& v) {
-                 cfg.passes = parseNumber<int>("--passes", v);
-                 if (cfg.passes < 1) throw Error(ErrorKind::Config, "--passes " + v + " is out of range (1..1048576)");
-             }});
-    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
-             [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
-    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default 0.667)",
-             [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
-    cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
-    cmd.add({"--seed", "N", "seed of every random sequence (default 0)", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
-    cmd.add({"--threads", "N", "worker threads (default 0: all cores); the image does not depend on it",
-             [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default 0)", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
-    addGridOptions(cmd, cfg);
-    cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
-             [&](const std::string& v) { cfg.vdb = v; }});
-    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
-    bool help;
-    std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
-    if (help) return 0;
-    if (pos.size() != 1) throw Error(ErrorKind::Config, "render needs exactly one SCENE (see raysplat render --help)");
-    cfg.scene = pos[0];
-    cfg.validate();
-
-    ConsoleReporter reporter(quiet);
+// Under mpirun every rank renders its part (lib/ranks.h); rank 0 alone reports and writes.
+int cmdRender(int argc, char** argv, Ranks& ranks) {
+    cli::Arguments args = cli::parseRender(argc, argv);
+    if (args.help) return 0;
+    RenderConfig& cfg = args.cfg;
+    const bool root = ranks.rank() == 0;
+    if (!root) cfg.vdb.clear();
+    ConsoleReporter console(args.quiet);
+    Reporter& reporter = root ? console : silentReporter();
     Timer load;
     Scene scene = loadScene(cfg.scene, reporter);
     double loadSeconds = load.seconds();
-    RenderResult result = render(scene, cfg, reporter);
+    RenderResult result = render(scene, cfg, reporter, ranks);
     result.stats.seconds.insert(result.stats.seconds.begin(), {"load", loadSeconds});
-    writeOutputs(result, cfg);
-    reporter.info(fmt("wrote %s (%dx%d, %s, %.2f s)", cfg.output.c_str(), result.film.width, result.film.height,
-                      methodName(cfg.method), result.stats.totalSeconds()));
+    if (root) writeOutputs(result, cfg);
+    // Rank 0 wrote its outputs: the others learn here whether that failed.
+    if (ranks.size() > 1 && ranks.agree(true, false).failedRank >= 0) throw Error(ErrorKind::OtherRank, "rank 0 failed");
+    std::string ranksNote = ranks.size() > 1 ? fmt(", %d ranks", ranks.size()) : "";
+    reporter.info(fmt("wrote %s (%dx%d, %s, %.2f s%s)", cfg.output.c_str(), result.film.width, result.film.height,
+                      methodName(cfg.method), result.stats.totalSeconds(), ranksNote.c_str()));
     return 0;
 }
 
@@ -424,30 +258,10 @@ int cmdInfo(int argc, char** argv) {
 }
 
 int cmdVoxelize(int argc, char** argv) {
-    RenderConfig cfg;
-    bool quiet = false;
-    Command cmd("raysplat voxelize SCENE -o GRID.vdb [options]",
-                "Voxelizes SCENE (.gltf or .glb) into the occlusion grid the splat renderer uses (six occlusion\n"
-                "ratios per voxel, 4x4 sub-samples per face) and writes it as OpenVDB: grids density (fog volume),\n"
-                "normal (vec3s) and occ_px, occ_nx, occ_py, occ_ny, occ_pz, occ_nz (count/16), plus metadata (dims,\n"
-                "voxel size, origin, voxelizer, cache key). The file opens in Blender (Add > Volume > Import\n"
-                "OpenVDB) and overlays the scene imported with Blender's glTF importer. Written atomically.");
-    cmd.add({"--output", "FILE", "the .vdb to write", [&](const std::string& v) { cfg.vdb = v; }, "-o"});
-    addGridOptions(cmd, cfg);
-    cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: all cores); the grid does not depend on it",
-             [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
-    bool help;
-    std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
-    if (help) return 0;
-    if (pos.size() != 1) throw Error(ErrorKind::Config, "voxelize needs exactly one SCENE (see raysplat voxelize --help)");
-    if (cfg.vdb.empty()) throw Error(ErrorKind::Config, "no output file: give -o GRID.vdb");
-    cfg.scene = pos[0];
-    cfg.validateGrid();
-    if (cfg.threads < 0 || cfg.threads > 1024)
-        throw Error(ErrorKind::Config, "--threads " + std::to_string(cfg.threads) + " is out of range (0..1024)");
-
-    ConsoleReporter reporter(quiet);
+    cli::Arguments args = cli::parseVoxelize(argc, argv);
+    if (args.help) return 0;
+    const RenderConfig& cfg = args.cfg;
+    ConsoleReporter reporter(args.quiet);
     Scene scene = loadScene(cfg.scene, reporter);
     const IVec3 dims = gridForBounds(scene.bounds, cfg.grid).dims;
     const int gridDims[3] = {dims.x, dims.y, dims.z};
@@ -507,6 +321,19 @@ void installStopHandlers() {
     sigaction(SIGTERM, &action, nullptr);
 }
 
+// One line for an error, from one rank: a failed rank tells the others (lib/ranks.h), and
+// the lowest failed rank speaks. OtherRank errors were said by another rank.
+int reportError(Ranks& ranks, const Error* error, const std::string& message) {
+    if (error && error->kind() == ErrorKind::OtherRank) return 1;
+    if (ranks.size() > 1 && ranks.agree(false, false).failedRank != ranks.rank()) return 1;
+    if (error && error->kind() == ErrorKind::Interrupted) {
+        std::fprintf(stderr, "raysplat: %s: stopped, no output written\n", message.c_str());
+        return 128 + stopSignal();
+    }
+    std::fprintf(stderr, "raysplat: error: %s\n", message.c_str());
+    return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -516,25 +343,28 @@ int main(int argc, char** argv) {
     }
     std::string command = argv[1];
     installStopHandlers();
+    std::unique_ptr<Ranks> mpi;
+    try {
+        mpi = cli::joinMpiJob(&argc, &argv);
+    } catch (const Error& e) {
+        return reportError(singleProcess(), &e, withFlags(e.what()));
+    }
+    // Only a render is divided between ranks; under mpirun the other commands run on rank 0.
+    const bool distributed = mpi && command == "render";
+    if (mpi && !distributed && mpi->rank() != 0) return 0;
+    Ranks& ranks = distributed ? *mpi : singleProcess();
     try {
         if (command == "--version") { std::printf("raysplat %s\n", versionString()); return 0; }
-        if (command == "render") return cmdRender(argc, argv);
+        if (command == "render") return cmdRender(argc, argv, ranks);
         if (command == "info") return cmdInfo(argc, argv);
         if (command == "voxelize") return cmdVoxelize(argc, argv);
         if (command == "compare") return cmdCompare(argc, argv);
         throw Error(ErrorKind::Config, "unknown command '" + command + "' (commands: render, info, voxelize, compare)");
     } catch (const Error& e) {
-        if (e.kind() == ErrorKind::Interrupted) {
-            std::fprintf(stderr, "raysplat: %s: stopped, no output written\n", e.what());
-            return 128 + stopSignal();
-        }
-        std::fprintf(stderr, "raysplat: error: %s\n", withFlags(e.what()).c_str());
-        return 1;
+        return reportError(ranks, &e, e.kind() == ErrorKind::Interrupted ? e.what() : withFlags(e.what()));
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "raysplat: error: out of memory\n");
-        return 1;
+        return reportError(ranks, nullptr, "out of memory");
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "raysplat: error: %s\n", e.what());
-        return 1;
+        return reportError(ranks, nullptr, e.what());
     }
 }

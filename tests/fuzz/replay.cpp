@@ -3,7 +3,7 @@
 // Error or a success, never a crash (the sanitizer build of CI turns memory errors into
 // failures too).
 //
-//   replay DIR...   each DIR named after its target (gltf, vdb)
+//   replay DIR...   each DIR named after its target (gltf, vdb, cli)
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
         const std::filesystem::path dir(argv[i]);
         const rs::fuzz::Target target = rs::fuzz::targetNamed(dir.filename().string());
         if (!target) {
-            std::fprintf(stderr, "replay: %s is not named after a target (gltf, vdb)\n", argv[i]);
+            std::fprintf(stderr, "replay: %s is not named after a target (gltf, vdb, cli)\n", argv[i]);
             return 1;
         }
         std::vector<std::filesystem::path> inputs;

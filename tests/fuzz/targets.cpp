@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
+#include "cli/options.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "grid/vdb_io.h"
@@ -45,9 +47,35 @@ void readVdbFile(const uint8_t* data, size_t size) {
     std::remove(path.c_str());
 }
 
+void parseCommandLine(const uint8_t* data, size_t size) {
+    if (size == 0) return;
+    std::vector<std::string> words = {"raysplat", data[0] % 2 ? "voxelize" : "render"};
+    std::string word;
+    for (size_t i = 1; i < size; ++i) {
+        if (data[i] == 0) {
+            words.push_back(word);
+            word.clear();
+        } else {
+            word += char(data[i]);
+        }
+    }
+    if (size > 1) words.push_back(word);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    try {
+        if (data[0] % 2)
+            cli::parseVoxelize(int(words.size()), argv.data());
+        else
+            cli::parseRender(int(words.size()), argv.data());
+    } catch (const Error&) {
+    }
+}
+
 Target targetNamed(const std::string& name) {
     if (name == "gltf") return loadGltf;
     if (name == "vdb") return readVdbFile;
+    if (name == "cli") return parseCommandLine;
     return nullptr;
 }
 

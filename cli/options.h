@@ -1,0 +1,67 @@
+// The command line's options: the flag parser, the help text, and the render and voxelize
+// commands' flags read into a RenderConfig. Nothing here touches a file: the parser is fuzzed
+// on its own (tests/fuzz, target cli).
+#pragma once
+
+#include <array>
+#include <charconv>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "config.h"
+#include "core/error.h"
+
+namespace rs::cli {
+
+struct Option {
+    std::string name;  // "--spp"
+    std::string arg;   // "N", or "" for a switch
+    std::string help;
+    std::function<void(const std::string&)> set;
+    std::string shortName = "";  // "-o", or none
+};
+
+template <class T>
+T parseNumber(const std::string& flag, const std::string& s) {
+    T v{};
+    const char* end = s.data() + s.size();
+    auto [p, ec] = std::from_chars(s.data(), end, v);
+    if (ec != std::errc() || p != end || s.empty())
+        throw Error(ErrorKind::Config, flag + ": '" + s + "' is not a valid number");
+    return v;
+}
+
+float parseFloat(const std::string& flag, const std::string& s);
+// "8G", "512M", "64k" or bytes → bytes (binary units).
+uint64_t parseSize(const std::string& flag, const std::string& s);
+// "a,b,c" → three numbers.
+void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out);
+
+class Command {
+public:
+    Command(std::string usage, std::string summary) : usage_(std::move(usage)), summary_(std::move(summary)) {}
+    void add(Option o) { options_.push_back(std::move(o)); }
+    // Returns the positional arguments from argv[first] on; sets helpShown (and prints the help)
+    // for -h or --help.
+    std::vector<std::string> parse(int argc, char** argv, int first, bool& helpShown);
+    void printHelp() const;
+
+private:
+    const Option* find(const std::string& name) const;
+    std::string usage_, summary_;
+    std::vector<Option> options_;
+};
+
+// `raysplat render …` and `raysplat voxelize …` (argv[1] is the command): the settings,
+// validated, or an Error(Config) naming the flag.
+struct Arguments {
+    RenderConfig cfg;
+    bool quiet = false;
+    bool help = false;  // --help was given and printed: nothing else to do
+};
+Arguments parseRender(int argc, char** argv);
+Arguments parseVoxelize(int argc, char** argv);
+
+}  // namespace rs::cli

@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""mpi_test: a render divided between Open MPI ranks is the render of one process, to the bit.
+
+Runs the real binary ($RAYSPLAT) under `mpirun --oversubscribe` against the same command
+without mpirun, and compares the EXRs' pixel data byte for byte (docs/design.md §13): splat with
+passes going round the ranks and with one pass shared between them, the path tracer both ways,
+and a --time-limit render, whose ranks must agree on one pass count. A failing rank must end
+every rank with one error line and no output. Skips (77) without mpirun or without MPI in the
+build.
+
+  mpi_test.py --mpi true|false   (whether raysplat was built with Open MPI)
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cli_test as cli  # noqa: E402  (the EXR parsing and the runner's conventions)
+
+RAYSPLAT = cli.RAYSPLAT
+SMALL = ("--width", "32", "--spp", "2", "--photons", "4000", "--grid", "48", "--threads", "1", "--quiet")
+
+
+def mpirun(ranks, *args, timeout=300):
+    command = ["mpirun", "--oversubscribe", "-np", str(ranks)]
+    if os.geteuid() == 0:
+        command.append("--allow-run-as-root")
+    return subprocess.run(command + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          timeout=timeout, text=True, errors="replace")
+
+
+def render(out, name, ranks, scene, *args):
+    """Renders to out/name.exr (with stats) with `ranks` MPI ranks, or one plain process for 0."""
+    exr, stats = os.path.join(out, name + ".exr"), os.path.join(out, name + ".json")
+    command = ["render", scene, "-o", exr, "--stats-json", stats, *SMALL, *args]
+    r = mpirun(ranks, RAYSPLAT, *command) if ranks else cli.run(*command, timeout=300)
+    cli.check(r.returncode == 0, "%s with %d ranks failed (%d): %s" % (name, ranks, r.returncode, r.stderr))
+    with open(exr, "rb") as f:
+        pixels = cli.exr_pixel_chunks(f.read())
+    with open(stats) as f:
+        counts = json.load(f)["counts"]
+    return pixels, counts
+
+
+def same_image(ranks, scene, *args):
+    def test():
+        with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+            one, one_counts = render(out, "one", 0, scene, *args)
+            many, many_counts = render(out, "many", ranks, scene, *args)
+        cli.check(many_counts.get("ranks") == ranks, "stats say %r ranks" % many_counts.get("ranks"))
+        cli.check(many_counts["passes"] == one_counts["passes"], "passes %r vs %r" % (many_counts["passes"], one_counts["passes"]))
+        cli.check(many == one, "the pixels of %d ranks differ from one process's" % ranks)
+    return test
+
+
+def test_time_limit_ranks_agree_on_the_passes():
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        many, counts = render(out, "many", 2, cli.CORNELL, "--time-limit", "2")
+        passes = int(counts["passes"])
+        cli.check(passes >= 2 and passes % 2 == 0, "2 ranks rendered %d passes: whole rounds of 2 expected" % passes)
+        one, _ = render(out, "one", 0, cli.CORNELL, "--passes", str(passes))
+    cli.check(many == one, "the time-limited image differs from %d passes in one process" % passes)
+
+
+def test_a_failing_rank_ends_all_with_one_message():
+    """Rank 1 is given a scene that does not exist (mpirun's MPMD form): no output, one line."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        exr = os.path.join(out, "x.exr")
+        good = ["render", cli.CORNELL, "-o", exr, *SMALL]
+        bad = ["render", os.path.join(out, "missing.gltf"), "-o", exr, *SMALL]
+        r = mpirun(1, RAYSPLAT, *good, ":", "-np", "1", RAYSPLAT, *bad)
+        leftover = os.listdir(out)
+    errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
+    cli.check(r.returncode != 0, "mpirun exited 0")
+    cli.check(errors == ["raysplat: error: %s: no such file" % os.path.join(out, "missing.gltf")],
+              "expected one error line naming the file, got %r" % errors)
+    cli.check(leftover == [], "files left behind: %r" % leftover)
+
+
+def test_bad_settings_are_said_once():
+    r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "0")
+    errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
+    cli.check(r.returncode != 0 and len(errors) == 1, "exit %d, error lines %r" % (r.returncode, errors))
+
+
+def main():
+    built_with_mpi = "--mpi" in sys.argv and sys.argv[sys.argv.index("--mpi") + 1] == "true"
+    if not built_with_mpi or not shutil.which("mpirun"):
+        print("mpi_test: skipped: %s" % ("raysplat was built without MPI" if not built_with_mpi else "no mpirun"))
+        return 77
+    tests = [
+        ("splat: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--passes", "3")),
+        ("splat: 1 pass shared by 3 ranks (the paper's estimator)", same_image(3, cli.GLOSSY, "--direct", "photons", "--passes", "1")),
+        ("path: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--method", "path", "--passes", "3")),
+        ("path: 1 pass's rows shared by 3 ranks", same_image(3, cli.GLOSSY, "--method", "path")),
+        ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),
+        ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
+        ("bad settings are said once", test_bad_settings_are_said_once),
+    ]
+    failed = 0
+    for name, test in tests:
+        try:
+            test()
+            print("PASS  %s" % name)
+        except (cli.Failure, subprocess.TimeoutExpired, OSError, KeyError, ValueError) as e:
+            failed += 1
+            print("FAIL  %s: %s" % (name, e))
+    print("%d passed, %d failed" % (len(tests) - failed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
