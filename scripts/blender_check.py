@@ -16,7 +16,8 @@ own Volume to Mesh of the density grid at a tiny threshold: its surface lies one
 active voxel cells (after undoing the half-voxel shift Blender adds to that mesh). The
 coarse bound_box is checked too (within one leaf).
 
-Exit status: 0 PASS, 1 FAIL, 77 skipped (bpy cannot be imported: machines without it).
+Exit status: 0 PASS, 1 FAIL, 77 skipped (bpy cannot be imported: machines without it; with
+RAYSPLAT_REQUIRE_BLENDER=1, as CI sets it, that is a failure too).
 
 Interpreter: $RAYSPLAT_BPY_PYTHON if set, else <source>/.venv-blender/bin/python if it
 exists, else the Python running this script; the script re-executes itself under it.
@@ -62,7 +63,7 @@ def reexec_under_bpy_python():
         os.execv(chosen, [chosen, str(Path(__file__).resolve())] + sys.argv[1:])
     except OSError as e:
         say(f"cannot run {chosen}: {e}")
-        sys.exit(FAIL if explicit else SKIP)
+        sys.exit(FAIL if explicit or os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1" else SKIP)
 
 
 def parse_args():
@@ -128,8 +129,9 @@ def main():
         import mathutils
         import numpy as np
     except Exception as e:  # ImportError, or a bpy built for another Python
-        say(f"SKIP: cannot import bpy with {sys.executable} ({e.__class__.__name__}: {e})")
-        return SKIP
+        required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
+        say(f"{'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e.__class__.__name__}: {e})")
+        return FAIL if required else SKIP
 
     say(f"Blender {bpy.app.version_string} (bpy) under {sys.executable}")
     scene_path = str(Path(args.scene).resolve())
