@@ -28,11 +28,16 @@ public:
         MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);  // only the main thread calls MPI
         MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
         MPI_Comm_size(MPI_COMM_WORLD, &size_);
+        MPI_Comm local;
+        MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &local);
+        MPI_Comm_size(local, &local_);
+        MPI_Comm_free(&local);
     }
     ~MpiRanks() override { MPI_Finalize(); }
 
     int rank() const override { return rank_; }
     int size() const override { return size_; }
+    int sizeOnThisMachine() const override { return local_; }
 
     Agreement agree(bool ok, bool more) override {
         // [lowest failed rank, rank 0's "stop"]: the others send INT_MAX, which MIN ignores.
@@ -51,7 +56,7 @@ public:
     }
 
 private:
-    int rank_ = 0, size_ = 1;
+    int rank_ = 0, size_ = 1, local_ = 1;
 };
 
 // mpirun (Open MPI's, or a PMI launcher's) tells its processes so in the environment.

@@ -106,7 +106,8 @@ Arguments parseRender(int argc, char** argv) {
                 "photons and splatting, averaged, with kernels shrinking from pass to pass. Direct light is sampled\n"
                 "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
                 "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
-                "atomically: a failed run leaves no file behind.");
+                "atomically: a failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or\n"
+                "with fewer passes than ranks each pass's photons, are divided between the ranks: the same image.");
     cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});

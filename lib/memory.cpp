@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include "core/error.h"
 #include "grid/occlusion_grid.h"
@@ -85,13 +86,17 @@ uint64_t availableMemory() {
     return available;
 }
 
-void checkMemory(const MemoryEstimate& estimate, uint64_t limitBytes) {
+void checkMemory(const MemoryEstimate& estimate, uint64_t limitBytes, int sharers) {
     const bool machine = limitBytes == 0;
-    const uint64_t limit = machine ? availableMemory() : limitBytes;
+    sharers = std::max(sharers, 1);
+    const uint64_t limit = machine ? availableMemory() / uint64_t(sharers) : limitBytes;
     if (limit == 0 || estimate.total() <= double(limit)) return;
-    char buf[160];
+    char each[64] = "";
+    if (machine && sharers > 1) std::snprintf(each, sizeof each, " to each of the %d ranks on this machine", sharers);
+    char buf[224];
     std::snprintf(buf, sizeof buf, " but %.2f GiB %s", double(limit) / kGiB,
-                  machine ? "are available (raise the limit with `max-memory` to try anyway)" : "are allowed (`max-memory`)");
+                  machine ? (std::string("are available") + each + " (raise the limit with `max-memory` to try anyway)").c_str()
+                          : "are allowed (`max-memory`)");
     throw Error(ErrorKind::Config, "this render needs about " + estimate.describe() + buf);
 }
 

@@ -30,6 +30,8 @@ uint64_t availableMemory();
 
 // Throws Error(Config) naming the estimate and the limit when the estimate exceeds
 // `limitBytes` (0: availableMemory(); nothing is checked when that is unknown).
-void checkMemory(const MemoryEstimate& estimate, uint64_t limitBytes);
+// `sharers`: the processes on this machine that render at once (an MPI job's ranks on it), each
+// allowed an equal part of the available memory.
+void checkMemory(const MemoryEstimate& estimate, uint64_t limitBytes, int sharers = 1);
 
 }  // namespace rs

@@ -14,6 +14,8 @@ public:
     virtual ~Ranks() = default;
     virtual int rank() const { return 0; }
     virtual int size() const { return 1; }
+    // The ranks on this machine (this one included): they share its memory.
+    virtual int sizeOnThisMachine() const { return 1; }
 
     // Every rank calls agree() at the same points of the render, and a failed rank once, in
     // place of the point it did not reach. Returns the lowest rank whose `ok` was false (-1:

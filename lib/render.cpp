@@ -256,7 +256,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     const int gridDims[3] = {geometry.dims.x, geometry.dims.y, geometry.dims.z};
     const int threads = cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads();
     const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), width, height, threads);
-    checkMemory(memory, cfg.maxMemory);
+    checkMemory(memory, cfg.maxMemory, ranks.sizeOnThisMachine());
     stats.setCount("memory_estimate_mb", memory.total() / kMB);
     agreeOrStop(ranks, false);  // every rank got this far: the scene loaded and fits
 

@@ -14,6 +14,7 @@ build.
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -81,6 +82,32 @@ def test_a_failing_rank_ends_all_with_one_message():
     cli.check(leftover == [], "files left behind: %r" % leftover)
 
 
+def test_ctrl_c_stops_every_rank_cleanly():
+    """SIGINT to mpirun (it sends the ranks SIGTERM): every rank stops, one line, no files."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        command = ["mpirun", "--oversubscribe", "-np", "2"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
+        command += [RAYSPLAT, "render", cli.CORNELL, "-o", os.path.join(out, "x.exr"), "--png",
+                    os.path.join(out, "x.png"), "--passes", "50", "--threads", "1"]
+        p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
+        # Wait until the passes have begun, then interrupt.
+        seen = ""
+        while "rendering" not in seen:
+            line = p.stderr.readline()
+            cli.check(line != "", "mpirun ended before rendering: %s" % seen)
+            seen += line
+        p.send_signal(signal.SIGINT)
+        try:
+            _, err = p.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise cli.Failure("the ranks did not stop within 30 s of SIGINT")
+        leftover = os.listdir(out)
+    stopped = [line for line in err.splitlines() if line.startswith("raysplat:") and "stopped" in line]
+    cli.check(p.returncode != 0, "mpirun exited 0 after SIGINT")
+    cli.check(len(stopped) == 1, "expected one 'stopped' line, got %r" % stopped)
+    cli.check(leftover == [], "files left behind: %r" % leftover)
+
+
 def test_bad_settings_are_said_once():
     r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "0")
     errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
@@ -100,6 +127,7 @@ def main():
         ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),
         ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
         ("bad settings are said once", test_bad_settings_are_said_once),
+        ("Ctrl-C stops every rank cleanly", test_ctrl_c_stops_every_rank_cleanly),
     ]
     failed = 0
     for name, test in tests:
