@@ -93,12 +93,15 @@ void addGridOptions(Command& cmd, RenderConfig& cfg) {
              [&](const std::string& v) { cfg.maxMemory = parseSize("--max-memory", v); }});
 }
 
+void addQuietOption(Command& cmd, bool& quiet) {
+    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
+}
+
 }  // namespace
 
 Arguments parseRender(int argc, char** argv) {
     Arguments args;
     RenderConfig& cfg = args.cfg;
-    bool& quiet = args.quiet;
     Command cmd("raysplat render SCENE -o OUT.exr [options]",
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
@@ -158,7 +161,7 @@ Arguments parseRender(int argc, char** argv) {
     addGridOptions(cmd, cfg);
     cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
              [&](const std::string& v) { cfg.vdb = v; }});
-    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
+    addQuietOption(cmd, args.quiet);
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, args.help);
     if (args.help) return args;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "render needs exactly one SCENE (see raysplat render --help)");
@@ -170,7 +173,6 @@ Arguments parseRender(int argc, char** argv) {
 Arguments parseVoxelize(int argc, char** argv) {
     Arguments args;
     RenderConfig& cfg = args.cfg;
-    bool& quiet = args.quiet;
     Command cmd("raysplat voxelize SCENE -o GRID.vdb [options]",
                 "Voxelizes SCENE (.gltf or .glb) into the occlusion grid the splat renderer uses (six occlusion\n"
                 "ratios per voxel, 4x4 sub-samples per face) and writes it as OpenVDB: grids density (fog volume),\n"
@@ -181,7 +183,7 @@ Arguments parseVoxelize(int argc, char** argv) {
     addGridOptions(cmd, cfg);
     cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: all cores); the grid does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
+    addQuietOption(cmd, args.quiet);
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, args.help);
     if (args.help) return args;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "voxelize needs exactly one SCENE (see raysplat voxelize --help)");
