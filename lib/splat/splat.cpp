@@ -27,6 +27,18 @@ inline int64_t toFixed(float v) {
     return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
 }
 
+// The 65536 unit vectors of the 16-bit octahedral code, decoded once: the splat decodes two a
+// contribution, and a table read (neighbouring samples share their normals) costs less than
+// the square root and division of decodeUnit16. Same values, bit for bit.
+const Vec3* unitTable() {
+    static const std::vector<Vec3> table = [] {
+        std::vector<Vec3> t(65536);
+        for (uint32_t e = 0; e < t.size(); ++e) t[e] = decodeUnit16(uint16_t(e));
+        return t;
+    }();
+    return table.data();
+}
+
 // Bits of x spread to every third position (x < 2^10).
 inline uint32_t spreadBits(uint32_t x) {
     x = (x | x << 16) & 0x030000ffu;
@@ -165,10 +177,10 @@ public:
         if (t <= 0.f || t > end_) return;
         const float d2 = glm::dot(oy, oy) - t * t;
         if (d2 >= h2_) return;
-        const Vec3 n = decodeUnit16(samples_.normal[i]);
+        const Vec3 n = units_[samples_.normal[i]];
         const float cosTheta = glm::dot(n, w);
         if (cosTheta >= 0.f) return;
-        const Vec3 ng = decodeUnit16(samples_.geomNormal[i]);
+        const Vec3 ng = units_[samples_.geomNormal[i]];
         if (glm::dot(ng, w) >= 0.f) return;
         if (visibility_ && !receivers_.inFrontOfOrigin(y)) {
             ++stats_.refused[SegmentReceivers::kBehindOrigin];
@@ -191,6 +203,7 @@ public:
 
 private:
     const EyeSamples& samples_;
+    const Vec3* const units_ = unitTable();
     const PhotonRay& ray_;
     const float h2_, end_;
     const bool visibility_;
