@@ -181,19 +181,25 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
 // voxel (clamped to the brick, where the tree put it) gives its slice.
 void CylinderTraversal::gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last) {
+    // The events are written field by field into room made first: a pushed temporary would be
+    // built on the stack and reloaded whole, a store-forwarding stall per sample.
+    size_t n = s_.samples.size();
+    s_.samples.resize(n + (last - first));
     for (uint32_t i = first; i < last; ++i) {
         const Vec3 p = (eye_.position[i] - g_.origin) * invVoxel_;
         const Vec3 d = p - o_;
         const float along = glm::dot(d, w_);
         if (!(along > 0.f && along <= L_) || glm::dot(d, d) - along * along >= kernel2_) continue;
         if (hasNormal_ && glm::dot(d, n_) <= 0.f) continue;
-        int v[3];
-        for (int a = 0; a < 3; ++a) v[a] = std::clamp(int(std::floor(p[a])), int(e.lo[a]), int(e.hi[a]) - 1);
-        const float u = (p[U_] - o_[U_]) - kU_ * (p[N_] - o_[N_]);
-        const float vv = (p[V_] - o_[V_]) - kV_ * (p[N_] - o_[N_]);
-        s_.samples.push_back({i, sliceOf(v[N_]), u, vv});
-        ++st_.samplesReached;
+        const int vN = std::clamp(int(std::floor(p[N_])), int(e.lo[N_]), int(e.hi[N_]) - 1);
+        SampleEvent& ev = s_.samples[n++];
+        ev.index = i;
+        ev.slice = sliceOf(vN);
+        ev.u = (p[U_] - o_[U_]) - kU_ * (p[N_] - o_[N_]);
+        ev.v = (p[V_] - o_[V_]) - kV_ * (p[N_] - o_[N_]);
     }
+    st_.samplesReached += n - (s_.samples.size() - (last - first));
+    s_.samples.resize(n);
 }
 
 // A single Occlusion voxel, or a collapsed block: each of its met voxels is an occluder.
