@@ -155,7 +155,7 @@ Arguments parseRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
     cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
     cmd.add({"--seed", "N", "seed of every random sequence (default 0)", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
-    cmd.add({"--threads", "N", "worker threads (default 0: all cores); the image does not depend on it",
+    cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
     cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default 0)", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
     addGridOptions(cmd, cfg);
@@ -181,7 +181,7 @@ Arguments parseVoxelize(int argc, char** argv) {
                 "OpenVDB) and overlays the scene imported with Blender's glTF importer. Written atomically.");
     cmd.add({"--output", "FILE", "the .vdb to write", [&](const std::string& v) { cfg.vdb = v; }, "-o"});
     addGridOptions(cmd, cfg);
-    cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: all cores); the grid does not depend on it",
+    cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: every core this process may run on); the grid does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
     addQuietOption(cmd, args.quiet);
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, args.help);

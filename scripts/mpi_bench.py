@@ -40,7 +40,9 @@ def main():
     cores = os.cpu_count() or 1
     common = ["render", a.scene, "--width", str(a.width), "--direct", "photons", "--passes", str(a.passes),
               "--photons", "100000", "--grid", "192", "--quiet"]
-    mpirun = ["mpirun", "--oversubscribe"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
+    # --bind-to none: Open MPI binds each of up to two ranks to one core by default, which would
+    # leave a rank's threads sharing it.
+    mpirun = ["mpirun", "--oversubscribe", "--bind-to", "none"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_bench_") as out:
         setups = [("1 process", 0)] + [("%d rank%s" % (n, "s" if n > 1 else ""), n) for n in (1, 2, 4)]
         reference = None

@@ -1,10 +1,18 @@
 #include "core/parallel.h"
 
+#include <sched.h>
+
 #include "core/stop.h"
 
 namespace rs {
 
-int ThreadPool::hardwareThreads() { return std::max(1u, std::thread::hardware_concurrency()); }
+// The CPUs this process may run on: all of them, or fewer under taskset, a cgroup's cpuset or
+// mpirun's binding (a rank bound to one core gets one thread, not all of the machine's).
+int ThreadPool::hardwareThreads() {
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return CPU_COUNT(&set);
+    return int(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 ThreadPool::ThreadPool(int threads) {
     int n = threads > 0 ? threads : hardwareThreads();
