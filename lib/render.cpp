@@ -150,7 +150,8 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass) {
     if (several) c.reporter.end();
     for (std::vector<int64_t>& buffer : sum.buffers) c.ranks.sumAtRoot(buffer);
     c.stats.setCount("passes", passes);
-    return sum.average(passes);
+    // The image is rank 0's; the others have nothing left to do that could fail.
+    return me == 0 ? sum.average(passes) : Film();
 }
 
 // The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …

@@ -23,7 +23,7 @@ struct RenderResult {
 };
 
 // With several ranks (an MPI job, lib/ranks.h) every rank calls it alike; rank 0's result holds
-// the image, the others' film is partial.
+// the image, the others' film is empty.
 RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks = singleProcess());
 
 // EXR (+ PNG, + stats JSON) as the config asks, each written atomically.

@@ -15,9 +15,7 @@
 #                           suppressed in third-party headers, and why. Without EGL: Mesa's
 #                           llvmpipe keeps allocations made from its JIT code to the end, which
 #                           LeakSanitizer reports and cannot attribute; without MPI: Open MPI's
-#                           own allocations are reported the same way. Three statistical tests
-#                           that render many passes of code the others cover are left out
-#                           (SANITIZE_SKIP), to keep CI under ten minutes on two cores
+#                           own allocations are reported the same way
 #
 # Packages are installed with apt-get only when one is missing (needs root or sudo).
 set -euo pipefail
@@ -47,9 +45,6 @@ install_missing() {
 # Debian 12's), pinned, in its own virtual environment. Without network it is skipped (the
 # test then skips), unless RAYSPLAT_REQUIRE_BLENDER=1 (CI) makes that a failure.
 readonly BPY_VERSION=4.2.0
-# Left out of the sanitizer run: convergence and sealed-room statistics over many passes (1.5
-# of its 5 minutes), whose code the thread-count, leak-cause and Cornell box tests run too.
-readonly SANITIZE_SKIP="Passes.ErrorFallsWithEveryQuadrupling:SealedRooms.*:GapRooms.*"
 blender_venv() {
   local python=.venv-blender/bin/python
   if [ -x "$python" ] && "$python" -c "import importlib.metadata as m; assert m.version('bpy') == '$BPY_VERSION'" 2>/dev/null; then
@@ -94,7 +89,7 @@ case "${1:-}" in
       -Db_sanitize=address,undefined -Db_lundef=false -Dbench=false -Degl=disabled -Dmpi=disabled
     ninja -C build-san
     UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tests/sanitizers/ubsan.supp" \
-      GTEST_FILTER="-$SANITIZE_SKIP" meson test -C build-san --print-errorlogs --num-processes 2 --timeout-multiplier 4
+      meson test -C build-san --print-errorlogs --num-processes 2 --timeout-multiplier 4
     ;;
   *)
     echo "usage: scripts/run.sh render|test|build|study|sanitize" >&2; exit 2 ;;
