@@ -26,11 +26,12 @@ RAYSPLAT = cli.RAYSPLAT
 SMALL = ("--width", "32", "--spp", "2", "--photons", "4000", "--grid", "48", "--threads", "1", "--quiet")
 
 
+def mpirun_command(ranks):
+    return ["mpirun", "--oversubscribe", "-np", str(ranks)] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
+
+
 def mpirun(ranks, *args, timeout=300):
-    command = ["mpirun", "--oversubscribe", "-np", str(ranks)]
-    if os.geteuid() == 0:
-        command.append("--allow-run-as-root")
-    return subprocess.run(command + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    return subprocess.run(mpirun_command(ranks) + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           timeout=timeout, text=True, errors="replace")
 
 
@@ -85,8 +86,7 @@ def test_a_failing_rank_ends_all_with_one_message():
 def test_ctrl_c_stops_every_rank_cleanly():
     """SIGINT to mpirun (it sends the ranks SIGTERM): every rank stops, one line, no files."""
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
-        command = ["mpirun", "--oversubscribe", "-np", "2"] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
-        command += [RAYSPLAT, "render", cli.CORNELL, "-o", os.path.join(out, "x.exr"), "--png",
+        command = mpirun_command(2) + [RAYSPLAT, "render", cli.CORNELL, "-o", os.path.join(out, "x.exr"), "--png",
                     os.path.join(out, "x.png"), "--passes", "50", "--threads", "1"]
         p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
         # Wait until the passes have begun, then interrupt.

@@ -48,7 +48,7 @@ void FixedFilm::addSaturating(int64_t& sum, int64_t v) {
 void FixedFilm::add(const Film& film) {
     RS_CHECK(film.width == width && film.height == height);
     for (int b = 0; b < kBuffers; ++b) {
-        const std::vector<Vec3>& from = b < kLayerCount ? film.layers[b] : b == kLayerCount ? film.albedo : film.normal;
+        const std::vector<Vec3>& from = film.buffer(b);
         int64_t* to = buffers[b].data();
         for (size_t i = 0; i < from.size(); ++i)
             for (int c = 0; c < 3; ++c) addSaturating(to[i * 3 + c], toFixed(from[i][c]));
@@ -65,7 +65,7 @@ Film FixedFilm::average(int passes) const {
     Film film(width, height);
     const double scale = 1.0 / (kScale * double(std::max(passes, 1)));
     for (int b = 0; b < kBuffers; ++b) {
-        std::vector<Vec3>& to = b < kLayerCount ? film.layers[b] : b == kLayerCount ? film.albedo : film.normal;
+        std::vector<Vec3>& to = film.buffer(b);
         const int64_t* from = buffers[b].data();
         for (size_t i = 0; i < to.size(); ++i)
             to[i] = Vec3(float(double(from[i * 3]) * scale), float(double(from[i * 3 + 1]) * scale),

@@ -22,6 +22,9 @@ struct Film {
     Film() = default;
     Film(int w, int h);
     size_t pixelCount() const { return size_t(width) * height; }
+    // Buffer b of the FixedFilm order: the layers, then albedo, then normal.
+    std::vector<Vec3>& buffer(int b) { return b < kLayerCount ? layers[b] : b == kLayerCount ? albedo : normal; }
+    const std::vector<Vec3>& buffer(int b) const { return const_cast<Film*>(this)->buffer(b); }
     Vec3 beauty(size_t i) const;
     std::vector<Vec3> beautyImage() const;
 };
