@@ -24,6 +24,17 @@ uint64_t parseSize(const std::string& flag, const std::string& s) {
     return uint64_t(v * double(uint64_t(1) << shift));
 }
 
+// Three numbers → "a,b,c", each in its shortest form (for --help's defaults).
+static std::string tripleText(const std::array<float, 3>& v) {
+    std::string out;
+    for (int i = 0; i < 3; ++i) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%g", double(v[size_t(i)]));
+        out += (i ? "," : "") + std::string(buf);
+    }
+    return out;
+}
+
 // "a,b,c" → three numbers.
 void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out) {
     float v[3];
@@ -136,11 +147,12 @@ Arguments parseRender(int argc, char** argv) {
                  parseTriple("--split", v, cfg.split);
                  cfg.splitSet = true;
              }});
-    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default 16,32,16)",
+    const RenderConfig defaults;
+    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default " + tripleText(defaults.kernelPhotons) + ")",
              [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
-    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default 1,6,1)",
+    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default " + tripleText(defaults.minRadius) + ")",
              [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
-    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default 16,24,16)",
+    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default " + tripleText(defaults.maxRadius) + ")",
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
     cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
              [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
