@@ -24,17 +24,6 @@ uint64_t parseSize(const std::string& flag, const std::string& s) {
     return uint64_t(v * double(uint64_t(1) << shift));
 }
 
-// Three numbers → "a,b,c", each in its shortest form (for --help's defaults).
-static std::string tripleText(const std::array<float, 3>& v) {
-    std::string out;
-    for (int i = 0; i < 3; ++i) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%g", double(v[size_t(i)]));
-        out += (i ? "," : "") + std::string(buf);
-    }
-    return out;
-}
-
 // "a,b,c" → three numbers.
 void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out) {
     float v[3];

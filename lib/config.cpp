@@ -109,7 +109,7 @@ void RenderConfig::resolution(float aspect, int& w, int& h) const {
         throw Error(ErrorKind::Config, "resolution " + std::to_string(w) + "x" + std::to_string(h) + " from the camera's aspect is too large");
 }
 
-static std::string triple(const ClassTriple& v) {
+std::string tripleText(const ClassTriple& v) {
     char b[96];
     std::snprintf(b, sizeof b, "%g,%g,%g", v[0], v[1], v[2]);
     return b;
@@ -131,9 +131,9 @@ ImageAttributes RenderConfig::attributes() const {
         if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
         a["alpha"] = std::to_string(alpha);
         a["photons"] = std::to_string(photons);
-        a["split"] = triple(used);
-        a["kernelPhotons"] = triple(kernelPhotons);
-        a["radiusVoxels"] = triple(minRadius) + "/" + triple(maxRadius);
+        a["split"] = tripleText(used);
+        a["kernelPhotons"] = tripleText(kernelPhotons);
+        a["radiusVoxels"] = tripleText(minRadius) + "/" + tripleText(maxRadius);
     }
     return a;
 }

@@ -27,6 +27,10 @@ enum class DirectMethod { Sample, Photons };
 const char* directMethodName(DirectMethod d);
 DirectMethod parseDirectMethod(const std::string& name);  // throws Error(Config)
 
+// A per-class triple as "a,b,c", each number in its shortest form (%g): the EXR header's
+// settings and --help's defaults.
+std::string tripleText(const ClassTriple& v);
+
 struct RenderConfig {
     std::string scene;
     std::string output;     // .exr
