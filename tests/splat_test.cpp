@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <random>
+#include <set>
 
 #include "splat/eye.h"
 #include "splat/kdtree.h"
@@ -12,6 +14,7 @@
 #include "splat/photons.h"
 #include "render.h"
 #include "splat/splat.h"
+#include "scene/triangle_bvh.h"
 #include "test_scenes.h"
 #include "grid/voxelize.h"
 
@@ -202,6 +205,116 @@ TEST(SplatStage, ClosedRoomReflectsEmittedPowerTimesAlbedo) {
         shared.add(one);
     }
     EXPECT_EQ(shared.buffers[kDirect], film.buffers[kDirect]);
+}
+
+// A room with a pillar and a slab in it, and a sphere: enough triangles for the TriangleBvh
+// to have levels, and walls that stand beside photon segments.
+static Scene furnishedRoom() {
+    Scene s;
+    uint32_t wall = addMaterial(s, MaterialKind::Lambert, Vec3(0.6f));
+    uint32_t light = addMaterial(s, MaterialKind::Lambert, Vec3(0.f), Vec3(10.f));
+    addBox(s, {-1, 0, -1}, {1, 2, 1}, wall, /*inward=*/true);
+    addBox(s, {-0.2f, 0.f, -0.2f}, {0.2f, 1.4f, 0.2f}, wall);
+    addBox(s, {0.3f, 0.6f, -0.8f}, {0.9f, 0.65f, 0.1f}, wall);
+    addSphere(s, {-0.5f, 0.4f, 0.5f}, 0.3f, 3, wall);
+    addQuad(s, {-0.25f, 1.9f, -0.25f}, {0.25f, 1.9f, -0.25f}, {0.25f, 1.9f, 0.25f}, {-0.25f, 1.9f, 0.25f}, light);
+    s.computeBounds();
+    return s;
+}
+
+// The BVH's cylinder query finds exactly the triangles whose boxes the cylinder's disc boxes
+// touch (brute force over every triangle with the same test), and stops when told to.
+TEST(VisibilityPlanes, TriangleBvhFindsWhatBruteForceFinds) {
+    const Scene s = furnishedRoom();
+    const TriangleBvh bvh(s);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    int nonEmpty = 0;
+    for (int q = 0; q < 300; ++q) {
+        const Vec3 o(u(rng), 1.f + u(rng), u(rng));
+        const Vec3 w = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+        const float r = 0.01f + 0.2f * (u(rng) + 1.f), t1 = 2.f * (u(rng) + 1.f);
+        std::set<uint32_t> expected, found;
+        float ra[3];
+        for (int a = 0; a < 3; ++a) ra[a] = r * std::sqrt(std::max(0.f, 1.f - w[a] * w[a]));
+        for (uint32_t t = 0; t < s.triangleCount(); ++t) {
+            Bounds3 b;
+            for (int k = 0; k < 3; ++k) b.extend(s.positions[3 * t + k]);
+            float s0 = 0.f, s1 = t1;
+            for (int a = 0; a < 3; ++a) {
+                clipLowerFace(o[a], w[a], ra[a], b.lo[a], s0, s1);
+                clipUpperFace(o[a], w[a], ra[a], b.hi[a], s0, s1);
+            }
+            if (s0 <= s1) expected.insert(t);
+        }
+        EXPECT_TRUE(bvh.nearCylinder(o, w, r, 0.f, t1, [&](uint32_t t) { return found.insert(t).second; }));
+        EXPECT_EQ(found, expected) << "query " << q;
+        nonEmpty += !expected.empty();
+        if (expected.size() > 1) {
+            int calls = 0;
+            EXPECT_FALSE(bvh.nearCylinder(o, w, r, 0.f, t1, [&](uint32_t) { return ++calls < 2; }));
+            EXPECT_EQ(calls, 2);
+        }
+    }
+    EXPECT_GT(nonEmpty, 250);
+    EXPECT_LT(bvh.bytes(), s.triangleCount() * 64);
+}
+
+// Rule 2 by planes never contradicts Embree: a point the planes call visible from x(i−1) is
+// one Embree finds unoccluded (points all over each photon's cylinder, many of them behind
+// the pillar or the slab); and the splat gives the same film, to the bit, with the planes and
+// with an Embree ray for every receiver, while the planes spare most of those rays.
+TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
+    const Scene s = furnishedRoom();
+    ThreadPool pool(2);
+    RayAccel accel(s, 2);
+    LightSampler lights(s);
+    PhotonSettings ps;
+    ps.photons = 4000;
+    ps.voxelSize = s.bounds.diagonal() / 64.f;
+    PhotonMap photons = tracePhotons(s, accel, lights, ps, pool, silentReporter());
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    int64_t decided = 0, asked = 0;
+    for (const PhotonRay& ray : photons.rays) {
+        const SegmentReceivers receivers(accel, ray, true);
+        const Frame frame(ray.dir);
+        for (int k = 0; k < 16; ++k) {
+            const float t = u(rng) * (ray.length + ray.radius * ray.reach), phi = 2.f * kPi * u(rng);
+            const float d = ray.radius * std::sqrt(u(rng));
+            const Vec3 p = ray.origin + t * ray.dir + frame.toWorld(Vec3(d * std::cos(phi), d * std::sin(phi), 0.f));
+            ++asked;
+            if (!receivers.surelyVisible(p)) continue;
+            ++decided;
+            EXPECT_EQ(accel.occludedToPoint(&p, 1, ray.origin), 0u) << "photon at " << ray.origin.x << "," << ray.origin.y << "," << ray.origin.z;
+        }
+    }
+    EXPECT_GT(decided, asked / 10);
+
+    OcclusionGrid grid = voxelizeCpu(s, gridForBounds(s.bounds, 64), pool, silentReporter());
+    Camera c;
+    c.position = {0.f, 1.f, 0.95f};
+    c.forward = {0.f, 0.f, -1.f};
+    c.up = {0.f, 1.f, 0.f};
+    c.right = glm::cross(c.forward, c.up);
+    c.yfov = 1.4f;
+    c.aspect = 1.f;
+    EyePassSettings es;
+    es.width = es.height = 48;
+    EyePass eye = traceEyePass(s, accel, nullptr, c, es, pool, silentReporter());
+    OcclusionTree tree = buildOcclusionTree(grid, eye.samples, pool);
+    SplatSettings withPlanes, withRays;
+    withRays.visibilityPlanes = false;
+    FixedFilm a(es.width, es.height), b(es.width, es.height);
+    SplatStats sa, sb;
+    splatPhotons(accel, tree, eye.samples, photons, withPlanes, a, pool, silentReporter(), &sa);
+    splatPhotons(accel, tree, eye.samples, photons, withRays, b, pool, silentReporter(), &sb);
+    for (int l = 0; l < FixedFilm::kBuffers; ++l) EXPECT_EQ(a.buffers[l], b.buffers[l]) << "buffer " << l;
+    EXPECT_EQ(sa.contributions, sb.contributions);
+    EXPECT_EQ(sb.visibleByPlanes, 0u);
+    EXPECT_GT(sa.visibleByPlanes, sa.contributions / 20);  // 14 % here: the sphere has many triangles
+    EXPECT_EQ(sa.visibilityRays + sa.visibleByPlanes, sb.visibilityRays);
+    EXPECT_GT(sb.refused[SegmentReceivers::kHidden], 0u);
 }
 
 // Cornell box: the splat image against the path tracer at high spp. Relative MSE (per

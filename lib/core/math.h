@@ -41,6 +41,23 @@ struct Bounds3 {
     float diagonal() const { return glm::length(extent()); }
 };
 
+// A cylinder o + tω (radius r) against an axis-aligned box, one face at a time: with
+// r = r_a = radius·sqrt(1 − ω_a²), the disc perpendicular to ω at t has half-extent r_a on
+// axis a, and the face keeps the part of [t0, t1] where that disc's box reaches past it.
+// Applying all six faces leaves the t-range whose disc boxes touch the box (empty: t0 > t1).
+inline void clipLowerFace(float o, float w, float r, float lo, float& t0, float& t1) {
+    float d = (lo - r) - o;
+    if (w > 0.f) t0 = std::max(t0, d / w);
+    else if (w < 0.f) t1 = std::min(t1, d / w);
+    else if (d > 0.f) t0 = kInf;
+}
+inline void clipUpperFace(float o, float w, float r, float hi, float& t0, float& t1) {
+    float d = (hi + r) - o;
+    if (w > 0.f) t1 = std::min(t1, d / w);
+    else if (w < 0.f) t0 = std::max(t0, d / w);
+    else if (d < 0.f) t0 = kInf;
+}
+
 // Right-handed orthonormal frame around a unit normal (Duff et al.'s branchless basis).
 struct Frame {
     Vec3 s, t, n;

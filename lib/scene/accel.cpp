@@ -16,6 +16,8 @@ struct RayAccel::Impl {
     RTCScene scene = nullptr;
     std::mutex errorMutex;
     std::string firstError;
+    std::once_flag bvhOnce;
+    std::unique_ptr<TriangleBvh> bvh;
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -65,6 +67,11 @@ RayAccel::RayAccel(const Scene& scene, int threads) : impl_(std::make_unique<Imp
 }
 
 RayAccel::~RayAccel() = default;
+
+const TriangleBvh& RayAccel::triangleBvh() const {
+    std::call_once(impl_->bvhOnce, [&] { impl_->bvh = std::make_unique<TriangleBvh>(scene_); });
+    return *impl_->bvh;
+}
 
 bool RayAccel::intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint& hit, float& t) const {
     RTCIntersectContext ctx;

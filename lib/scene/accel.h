@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "scene/scene.h"
+#include "scene/triangle_bvh.h"
 
 namespace rs {
 
@@ -34,6 +35,8 @@ public:
     static constexpr int kPacket = 16;
     uint32_t occludedToPoint(const Vec3* from, int count, const Vec3& to) const;
     const Scene& scene() const { return scene_; }
+    // The same triangles in a TriangleBvh, for queries by cylinder; built on first use.
+    const TriangleBvh& triangleBvh() const;
 
     struct Impl;  // Embree handles
 

@@ -114,20 +114,6 @@ struct FillCell {  // early-exit bookkeeping, valid when stamp matches the cylin
     int32_t maxSlice = INT_MIN, fullAt = INT_MAX;
 };
 
-// One face of a box clips the axis parameter range (§5.1): o + tω within r of the face.
-inline void clipLowerFace(float o, float w, float r, float lo, float& t0, float& t1) {
-    float d = (lo - r) - o;
-    if (w > 0.f) t0 = std::max(t0, d / w);
-    else if (w < 0.f) t1 = std::min(t1, d / w);
-    else if (d > 0.f) t0 = kInf;
-}
-inline void clipUpperFace(float o, float w, float r, float hi, float& t0, float& t1) {
-    float d = (hi + r) - o;
-    if (w > 0.f) t1 = std::min(t1, d / w);
-    else if (w < 0.f) t0 = std::max(t0, d / w);
-    else if (d < 0.f) t0 = kInf;
-}
-
 inline int majorAxis(const Vec3& w) {
     int n = 0;
     for (int a = 1; a < 3; ++a)
@@ -176,8 +162,11 @@ private:
 
     // Gathering.
     void descend(const StackEntry& e, Node node);
+    void prefetchNode(uint32_t index) const;
     void gatherBrick(const StackEntry& e, const Brick& brick);
     void gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last);
+    bool reached(const Vec3& p) const;
+    uint32_t reached4(const Vec3* world, Vec3 p[4]) const;
     void gatherOcclusionBlock(const StackEntry& e, Node node);
     void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
     void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;

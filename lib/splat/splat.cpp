@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "scene/accel.h"
+#include "scene/scene.h"
 #include "core/stats.h"
 #include "core/log.h"
 #include "core/parallel.h"
@@ -80,6 +81,7 @@ void SplatStats::report(Stats& stats) const {
     stats.setCount("traversal_samples_reached", double(traversal.samplesReached));
     stats.setCount("traversal_samples_visited", double(traversal.samplesVisited));
     stats.setCount("splat_visibility_rays", double(visibilityRays));
+    stats.setCount("splat_visible_by_planes", double(visibleByPlanes));
     stats.setCount("splat_refused_behind_origin", double(refused[SegmentReceivers::kBehindOrigin]));
     stats.setCount("splat_refused_hidden", double(refused[SegmentReceivers::kHidden]));
 }
@@ -88,17 +90,50 @@ void SplatStats::add(const SplatStats& o) {
     traversal.add(o.traversal);
     contributions += o.contributions;
     visibilityRays += o.visibilityRays;
+    visibleByPlanes += o.visibleByPlanes;
     for (int i = 0; i < SegmentReceivers::kVerdictCount; ++i) refused[i] += o.refused[i];
 }
 
-SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray)
+SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes)
     : accel_(accel), origin_(ray.origin),
-      originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {}
+      originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {
+    if (withPlanes) findPlanes(ray);
+}
 
-uint32_t SegmentReceivers::hidden(const Vec3* y, const Vec3* ng, int count) const {
-    // V(y, x(i−1)): the origin is already lifted off its surface (offsetRayOrigin).
-    Vec3 lifted[RayAccel::kPacket];
-    for (int i = 0; i < count; ++i) lifted[i] = y[i] + rayOriginOffset(y[i]) * ng[i];
+// The planes of the triangles near the cylinder, oriented to x(i−1). The cylinder is widened
+// by twice the largest lift of a sample in it; a side counts only past a margin of
+// 1e-5 × (1 + the largest coordinate involved), far above the rounding of the plane's
+// equation (~1e-7 of it) and a tenth of the lift, which puts a sample on its surface's front.
+void SegmentReceivers::findPlanes(const PhotonRay& ray) {
+    const float o = std::max(std::abs(origin_.x), std::max(std::abs(origin_.y), std::abs(origin_.z)));
+    const float length = ray.length + ray.radius * ray.reach;
+    const float reach = o + length + ray.radius;
+    const float widen = 2.f * rayOriginOffset(Vec3(reach));
+    const Scene& scene = accel_.scene();
+    int count = 0;
+    const bool few = accel_.triangleBvh().nearCylinder(
+        origin_, ray.dir, ray.radius + widen, -widen, length + widen, [&](uint32_t tri) {
+            if (count == kMaxPlanes) return false;
+            const Vec3* p = &scene.positions[3 * size_t(tri)];
+            const Vec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);
+            const float area2 = glm::length(c);
+            if (!(area2 > 0.f) || !std::isfinite(area2)) return false;  // no plane to decide by
+            Plane& plane = planes_[count];
+            plane.n = c / area2;
+            plane.d = glm::dot(plane.n, p[0]);
+            float extent = reach;
+            for (int k = 0; k < 3; ++k) extent = std::max(extent, maxComponent(glm::abs(p[k])));
+            plane.margin = 1e-5f * (1.f + extent);
+            const float side = glm::dot(plane.n, origin_) - plane.d;
+            if (!(std::abs(side) > plane.margin)) return false;  // x(i−1) too close to call
+            if (side < 0.f) plane.n = -plane.n, plane.d = -plane.d;
+            ++count;
+            return true;
+        });
+    planeCount_ = few ? count : -1;
+}
+
+uint32_t SegmentReceivers::hidden(const Vec3* lifted, int count) const {
     return accel_.occludedToPoint(lifted, count, origin_);
 }
 
@@ -111,13 +146,13 @@ public:
     PendingContributions(const SegmentReceivers& receivers, SplatStats& stats) : receivers_(receivers), stats_(stats) {}
     ~PendingContributions() { flush(); }
 
-    void add(const Vec3& y, const Vec3& ng, int64_t* pixel, const Vec3& c) {
-        y_[count_] = y, ng_[count_] = ng, pixel_[count_] = pixel, c_[count_] = c;
+    void add(const Vec3& lifted, int64_t* pixel, const Vec3& c) {
+        lifted_[count_] = lifted, pixel_[count_] = pixel, c_[count_] = c;
         if (++count_ == RayAccel::kPacket) flush();
     }
     void flush() {
         if (count_ == 0) return;
-        const uint32_t hidden = receivers_.hidden(y_, ng_, count_);
+        const uint32_t hidden = receivers_.hidden(lifted_, count_);
         stats_.visibilityRays += uint64_t(count_);
         for (int i = 0; i < count_; ++i) {
             if (hidden >> i & 1u) {
@@ -139,7 +174,7 @@ private:
     const SegmentReceivers& receivers_;
     SplatStats& stats_;
     int count_ = 0;
-    Vec3 y_[RayAccel::kPacket], ng_[RayAccel::kPacket], c_[RayAccel::kPacket];
+    Vec3 lifted_[RayAccel::kPacket], c_[RayAccel::kPacket];
     int64_t* pixel_[RayAccel::kPacket];
 };
 
@@ -164,9 +199,9 @@ Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility
 class PhotonSplat {
 public:
     PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, bool visibility,
-                int64_t* layer, SplatStats& stats)
+                bool planes, int64_t* layer, SplatStats& stats)
         : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), end_(ray.length + ray.radius * ray.reach),
-          visibility_(visibility), layer_(layer), stats_(stats), receivers_(accel, ray), pending_(receivers_, stats) {}
+          visibility_(visibility), layer_(layer), stats_(stats), receivers_(accel, ray, visibility && planes), pending_(receivers_, stats) {}
 
     void receive(uint32_t i, float visibility) {
         // Only samples in front of the ray's origin, inside the kernel, facing the photon.
@@ -193,11 +228,15 @@ public:
         if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
         int64_t* px = &layer_[size_t(samples_.pixel[i]) * 3];
         if (visibility_) {
-            pending_.add(y, ng, px, c);  // rule 2 decides, a packet at a time
-        } else {
-            PendingContributions::addFixed(px, c);
-            ++stats_.contributions;
+            const Vec3 lifted = SegmentReceivers::lift(y, ng);
+            if (!receivers_.surelyVisible(lifted)) {
+                pending_.add(lifted, px, c);  // Embree decides, a packet at a time
+                return;
+            }
+            ++stats_.visibleByPlanes;
         }
+        PendingContributions::addFixed(px, c);
+        ++stats_.contributions;
     }
     void finish() { pending_.flush(); }
 
@@ -246,7 +285,8 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
         if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
         for (int64_t p = first + b; p < first + e; ++p) {
             const PhotonRay& ray = photons.rays[order[size_t(p)]];
-            PhotonSplat splat(accel, samples, ray, settings.visibility, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
+            PhotonSplat splat(accel, samples, ray, settings.visibility, settings.visibilityPlanes,
+                              &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
             traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
                              [&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                              &stats[thread].traversal);

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "output/film.h"
+#include "scene/accel.h"
 #include "splat/kdtree_traverse.h"
 #include "splat/photons.h"
 
@@ -16,12 +17,12 @@ namespace rs {
 class ThreadPool;
 struct Stats;
 class Reporter;
-class RayAccel;
 
 struct SplatStats {
     TraversalStats traversal;
     uint64_t contributions = 0;  // (photon, eye sample) pairs that received energy
     uint64_t visibilityRays = 0;  // Embree occlusion rays of the receiver rules
+    uint64_t visibleByPlanes = 0;  // rule 2 decided without a ray (SegmentReceivers)
     uint64_t refused[2] = {};     // samples the receiver rules refused, by SegmentReceivers::Verdict
     void add(const SplatStats& o);
     void report(Stats& stats) const;  // splat_* and traversal_* counts
@@ -38,23 +39,51 @@ struct SplatStats {
 //     that runs beside the ray, and count only the back-facing side of a wall, whose
 //     discrete occlusion sums can fall short of full; this catches both. A sample behind
 //     the surface the segment ends on is behind it as seen from x(i−1) too.
+// Rule 2 without the ray: every such line lies inside the kernel's cylinder (radius h, from
+// x(i−1) to where the kernel ends, widened by the lift), so only the triangles near it
+// (TriangleBvh) can cross one. When there are at most kMaxPlanes of them and x(i−1) lies off
+// each one's plane, a lifted y on x(i−1)'s side of every plane sees x(i−1): a line between two
+// points on one side of a plane does not cross it. The sides are decided with a margin that
+// covers the rounding of the plane's equation, so such a y is one Embree would find visible
+// too; the others ask Embree. On the glossy box this decides about three quarters of them.
 class SegmentReceivers {
 public:
     enum Verdict { kReceives = -1, kBehindOrigin = 0, kHidden = 1, kVerdictCount = 2 };
+    static constexpr int kMaxPlanes = 16;
 
-    SegmentReceivers(const RayAccel& accel, const PhotonRay& ray);
+    // withPlanes: gather the triangles near the cylinder for surelyVisible (else it says no).
+    SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes);
     // Rule 1 for y.
     bool inFrontOfOrigin(const Vec3& y) const {
         return !hasOriginNormal_ || glm::dot(y - origin_, originNormal_) > 0.f;
     }
-    // Rule 2 for up to RayAccel::kPacket samples at once (y: position; ng: geometric normal on
-    // the side y is seen from): bit i set when sample i is hidden from x(i−1).
-    uint32_t hidden(const Vec3* y, const Vec3* ng, int count) const;
+    // The point rule 2 asks about for a sample at y whose geometric normal, on the side it is
+    // seen from, is ng.
+    static Vec3 lift(const Vec3& y, const Vec3& ng) { return y + rayOriginOffset(y) * ng; }
+    // Rule 2 by the planes alone: true when the lifted point surely sees x(i−1); false when
+    // Embree must say.
+    bool surelyVisible(const Vec3& lifted) const {
+        if (planeCount_ < 0) return false;
+        for (int k = 0; k < planeCount_; ++k)
+            if (!(glm::dot(planes_[k].n, lifted) - planes_[k].d > planes_[k].margin)) return false;
+        return true;
+    }
+    // Rule 2 by Embree for up to RayAccel::kPacket lifted points at once: bit i set when point
+    // i is hidden from x(i−1).
+    uint32_t hidden(const Vec3* lifted, int count) const;
 
 private:
+    struct Plane {
+        Vec3 n;  // unit, turned so that x(i−1) is on its positive side
+        float d, margin;
+    };
+    void findPlanes(const PhotonRay& ray);
+
     const RayAccel& accel_;
     Vec3 origin_, originNormal_;
     bool hasOriginNormal_;
+    int planeCount_ = -1;  // -1: the planes cannot decide
+    Plane planes_[kMaxPlanes];
 };
 
 // Biweight kernel over the disc of radius h: ∫ K dA = 1.
@@ -71,6 +100,9 @@ struct SplatSettings {
     // `share` of `shares` equal parts: a distributed render's ranks split a pass this way
     // (docs/design.md §11). The chunks are the same as in one process, so are the sums.
     int share = 0, shares = 1;
+    // Rule 2 decided by planes where they can (SegmentReceivers): the same image as asking
+    // Embree every time (off), which the tests compare it with.
+    bool visibilityPlanes = true;
     static constexpr int64_t kChunk = 256;
 };
 
