@@ -1,6 +1,10 @@
 // The steps of CylinderTraversal (kdtree_traverse.h states the rules they implement).
 #include "splat/kdtree_traverse.h"
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace rs {
 
 using namespace kd_detail;
@@ -113,6 +117,7 @@ void CylinderTraversal::gather() {
             continue;
         }
         const Node node = tree_.nodes[e.node];
+        if (!s_.stack.empty()) prefetchNode(s_.stack.back().node);
         switch (node.type()) {
             case NodeType::Empty: break;
             case NodeType::Split: descend(e, node); break;
@@ -120,6 +125,12 @@ void CylinderTraversal::gather() {
             case NodeType::Occlusion: gatherOcclusionBlock(e, node); break;
         }
     }
+}
+
+// The node that comes next: a brick's payload is asked for while this one is worked on.
+void CylinderTraversal::prefetchNode(uint32_t index) const {
+    const Node node = tree_.nodes[index];
+    if (node.type() == NodeType::Brick) __builtin_prefetch(&tree_.bricks[node.brick()]);
 }
 
 // Shrink the cylinder bounds to each child; the near child goes on top of the stack.
@@ -135,8 +146,18 @@ void CylinderTraversal::descend(const StackEntry& e, Node node) {
     clipLowerFace(o_[a], w_[a], r_[a], plane, upper.t0, upper.t1);
     const StackEntry& nearChild = w_[a] >= 0.f ? lower : upper;
     const StackEntry& farChild = w_[a] >= 0.f ? upper : lower;
+    __builtin_prefetch(&tree_.nodes[upper.node]);
     if (farChild.t0 <= farChild.t1) s_.stack.push_back(farChild);
     if (nearChild.t0 <= nearChild.t1) s_.stack.push_back(nearChild);
+}
+
+// Asks for the cache lines of a brick's part of a per-sample array: the tree's samples are
+// reached from all over the array, and waiting for them was the traversal's largest cost.
+template <class T>
+static void prefetchSamples(const std::vector<T>& v, const Brick& brick) {
+    const char* end = reinterpret_cast<const char*>(v.data() + brick.firstSample + brick.sampleCount);
+    for (const char* q = reinterpret_cast<const char*>(v.data() + brick.firstSample); q < end; q += 64)
+        __builtin_prefetch(q);
 }
 
 // The bits of a brick (whose min corner is e.lo) inside voxel ranges [i0, i1).
@@ -157,6 +178,7 @@ static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i
 // The brick's occupied voxels that the cylinder meets become occluders, walked over the set
 // bits in order (the rank of a bit is where its counts are); then its samples, by octant.
 void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
+    prefetchSamples(eye_.position, brick);  // wanted after the occluders: no waiting then
     int i0[3], i1[3];
     metRange(e, i0, i1);
     const uint64_t candidates = brick.occupied & brickRangeMask(e, i0, i1);
@@ -168,39 +190,102 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
         if (!surelyMet(Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f)) && !voxelMet(x, y, z)) continue;
         addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
     }
+    const size_t before = s_.samples.size();
     if (!brick.divided()) {
         gatherBrickSamples(e, brick.firstSample, brick.firstSample + brick.sampleCount);
-        return;
+    } else {
+        for (int k = 0; k < 8; ++k) {
+            const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
+            if (first != last && octantMayBeReached(e, k)) gatherBrickSamples(e, first, last);
+        }
     }
-    for (int k = 0; k < 8; ++k) {
-        const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
-        if (first != last && octantMayBeReached(e, k)) gatherBrickSamples(e, first, last);
-    }
+    // What the splat reads of a reached sample, on its way while the sweep runs.
+    if (s_.samples.size() != before)
+        prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
+            prefetchSamples(eye_.pixel, brick);
 }
 
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
-// voxel (clamped to the brick, where the tree put it) gives its slice.
+// voxel (clamped to the brick, where the tree put it) gives its slice. The tests run four
+// samples at a time where SSE is there (the same operations in the same order as reached(),
+// so the same answers); the events are then written for the reached ones.
 void CylinderTraversal::gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last) {
     // The events are written field by field into room made first: a pushed temporary would be
     // built on the stack and reloaded whole, a store-forwarding stall per sample.
     size_t n = s_.samples.size();
     s_.samples.resize(n + (last - first));
-    for (uint32_t i = first; i < last; ++i) {
-        const Vec3 p = (eye_.position[i] - g_.origin) * invVoxel_;
-        const Vec3 d = p - o_;
-        const float along = glm::dot(d, w_);
-        if (!(along > 0.f && along <= L_) || glm::dot(d, d) - along * along >= kernel2_) continue;
-        if (hasNormal_ && glm::dot(d, n_) <= 0.f) continue;
+    auto add = [&](uint32_t i, const Vec3& p) {
         const int vN = std::clamp(int(std::floor(p[N_])), int(e.lo[N_]), int(e.hi[N_]) - 1);
         SampleEvent& ev = s_.samples[n++];
         ev.index = i;
         ev.slice = sliceOf(vN);
         ev.u = (p[U_] - o_[U_]) - kU_ * (p[N_] - o_[N_]);
         ev.v = (p[V_] - o_[V_]) - kV_ * (p[N_] - o_[N_]);
+    };
+    uint32_t i = first;
+#if defined(__SSE2__)
+    for (; i + 4 <= last; i += 4) {
+        Vec3 p[4];
+        for (uint32_t bits = reached4(&eye_.position[i], p); bits; bits &= bits - 1) {
+            const int k = __builtin_ctz(bits);
+            add(i + uint32_t(k), p[k]);
+        }
+    }
+#endif
+    for (; i < last; ++i) {
+        const Vec3 p = (eye_.position[i] - g_.origin) * invVoxel_;
+        if (reached(p)) add(i, p);
     }
     st_.samplesReached += n - (s_.samples.size() - (last - first));
     s_.samples.resize(n);
 }
+
+// A sample at p (voxel space) is reached: depth in (0, L], within h of the axis line, in
+// front of the origin's tangent plane.
+inline bool CylinderTraversal::reached(const Vec3& p) const {
+    const Vec3 d = p - o_;
+    const float along = glm::dot(d, w_);
+    if (!(along > 0.f && along <= L_) || glm::dot(d, d) - along * along >= kernel2_) return false;
+    return !hasNormal_ || !(glm::dot(d, n_) <= 0.f);
+}
+
+#if defined(__SSE2__)
+// reached() for the four samples at `world` (world space, consecutive), bit k for sample k;
+// their voxel-space positions go to p. Each comparison is the negation reached() rejects by,
+// so a NaN goes the same way.
+uint32_t CylinderTraversal::reached4(const Vec3* world, Vec3 p[4]) const {
+    // Four packed xyz triples to x, y, z lanes.
+    const float* f = &world[0].x;
+    const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);
+    const __m128 wx = _mm_shuffle_ps(a, _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 1, 2, 2)), _MM_SHUFFLE(2, 0, 3, 0));
+    const __m128 wy = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1)), _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3)),
+                                     _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128 wz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
+                                     _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128 inv = _mm_set1_ps(invVoxel_);
+    const __m128 px = _mm_mul_ps(_mm_sub_ps(wx, _mm_set1_ps(g_.origin.x)), inv);
+    const __m128 py = _mm_mul_ps(_mm_sub_ps(wy, _mm_set1_ps(g_.origin.y)), inv);
+    const __m128 pz = _mm_mul_ps(_mm_sub_ps(wz, _mm_set1_ps(g_.origin.z)), inv);
+    const __m128 dx = _mm_sub_ps(px, _mm_set1_ps(o_.x)), dy = _mm_sub_ps(py, _mm_set1_ps(o_.y)),
+                 dz = _mm_sub_ps(pz, _mm_set1_ps(o_.z));
+    auto dot = [&](const Vec3& v) {
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_set1_ps(v.x)), _mm_mul_ps(dy, _mm_set1_ps(v.y))),
+                          _mm_mul_ps(dz, _mm_set1_ps(v.z)));
+    };
+    const __m128 along = dot(w_);
+    const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, _mm_set1_ps(L_)));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), _mm_set1_ps(kernel2_)));
+    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot(n_), _mm_setzero_ps()));
+    const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
+    if (bits) {
+        alignas(16) float x[4], y[4], z[4];
+        _mm_store_ps(x, px), _mm_store_ps(y, py), _mm_store_ps(z, pz);
+        for (int k = 0; k < 4; ++k) p[k] = Vec3(x[k], y[k], z[k]);
+    }
+    return bits;
+}
+#endif
 
 // A single Occlusion voxel, or a collapsed block: each of its met voxels is an occluder.
 void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
