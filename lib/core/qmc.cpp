@@ -22,6 +22,9 @@ ScrambledHalton::ScrambledHalton(uint64_t seed, int dimensions) : seed_(seed) {
         // As many digits as keep base^digits below 2^62 (exact integer reversal).
         int nd = int(std::floor(62.0 / std::log2(double(b))));
         digits_.push_back(nd);
+        double scale = 1.0;  // b^−nd, divided down as the digits were once: the same double
+        for (int k = 0; k < nd; ++k) scale /= double(b);
+        scales_.push_back(scale);
         offset_.push_back(perms_.size());
         for (int k = 0; k < nd; ++k) {
             size_t start = perms_.size();
@@ -35,20 +38,51 @@ ScrambledHalton::ScrambledHalton(uint64_t seed, int dimensions) : seed_(seed) {
     }
 }
 
-float ScrambledHalton::sample(uint64_t index, int dim) const {
-    if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
-    const uint64_t b = uint64_t(bases_[dim]);
-    const uint16_t* perm = &perms_[offset_[dim]];
+namespace {
+
+// The scrambled radical inverse's digits: `digits` permuted digits of index in base b, most
+// significant last. A constant base lets the compiler divide by multiplying.
+template <uint64_t B>
+uint64_t reverseDigits(uint64_t index, int digits, const uint16_t* perm) {
     uint64_t reversed = 0;
-    double scale = 1.0;
-    for (int k = 0; k < digits_[dim]; ++k) {
-        uint64_t next = index / b;
-        uint64_t digit = index - next * b;
-        reversed = reversed * b + perm[size_t(k) * b + digit];
-        scale /= double(b);
+    for (int k = 0; k < digits; ++k) {
+        const uint64_t next = index / B;
+        reversed = reversed * B + perm[size_t(k) * B + (index - next * B)];
         index = next;
     }
-    return std::min(float(double(reversed) * scale), 0x1.fffffep-1f);
+    return reversed;
+}
+
+uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm) {
+    switch (b) {
+        case 2: return reverseDigits<2>(index, digits, perm);
+        case 3: return reverseDigits<3>(index, digits, perm);
+        case 5: return reverseDigits<5>(index, digits, perm);
+        case 7: return reverseDigits<7>(index, digits, perm);
+        case 11: return reverseDigits<11>(index, digits, perm);
+        case 13: return reverseDigits<13>(index, digits, perm);
+        case 17: return reverseDigits<17>(index, digits, perm);
+        case 19: return reverseDigits<19>(index, digits, perm);
+        case 23: return reverseDigits<23>(index, digits, perm);
+        case 29: return reverseDigits<29>(index, digits, perm);
+        case 31: return reverseDigits<31>(index, digits, perm);
+        default: break;
+    }
+    uint64_t reversed = 0;
+    for (int k = 0; k < digits; ++k) {
+        const uint64_t next = index / b;
+        reversed = reversed * b + perm[size_t(k) * b + (index - next * b)];
+        index = next;
+    }
+    return reversed;
+}
+
+}  // namespace
+
+float ScrambledHalton::sample(uint64_t index, int dim) const {
+    if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
+    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]]);
+    return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
 }
 
 }  // namespace rs

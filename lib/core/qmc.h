@@ -19,6 +19,7 @@ public:
 private:
     uint64_t seed_;
     std::vector<int> bases_, digits_;
+    std::vector<double> scales_;      // bases_[d]^−digits_[d]
     std::vector<size_t> offset_;      // into perms_, per dimension
     std::vector<uint16_t> perms_;     // digits_[d] permutations of bases_[d] digits each
 };
