@@ -204,7 +204,10 @@ private:
         for (uint64_t bits = brick.occupied; bits; bits &= bits - 1) {
             int bit = __builtin_ctzll(bits);
             IVec3 v = lo + IVec3(bit & 3, (bit >> 2) & 3, bit >> 4);
-            tree_.voxels.push_back(VoxelOcclusion::of(grid_.voxel(g.index(v.x, v.y, v.z))));
+            const VoxelOcclusion voxel = VoxelOcclusion::of(grid_.voxel(g.index(v.x, v.y, v.z)));
+            tree_.voxels.push_back(voxel);
+            for (int side = 0; side < kSideCount; ++side)
+                if (voxel.count(side)) brick.sides[side] |= uint64_t(1) << bit;
         }
         RS_CHECK(order_.size() + size_t(to - from) < (size_t(1) << 32));
         brick.firstSample = uint32_t(order_.size());

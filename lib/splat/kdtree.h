@@ -67,13 +67,17 @@ struct VoxelOcclusion {
 
 // A brick's payload. Voxel (x, y, z) of the brick (0…3 each, from the brick's min corner) is
 // bit x + 4y + 16z of `occupied`; the occupied voxels' occlusion is stored from `firstVoxel` on,
-// in bit order; the brick's eye samples are [firstSample, firstSample + sampleCount), ordered
+// in bit order (`sides` marks them by side); the brick's eye samples are [firstSample, firstSample + sampleCount), ordered
 // by the octant of the brick (2×2×2 voxels: x/2 + 2·(y/2) + 4·(z/2)) their voxel is in, so
 // that a cylinder can skip the octants it does not reach: octant k's samples start at
 // firstSample + octantStart[k − 1] (0 for k = 0) and end where the next one starts
 // (sampleCount for k = 7). A brick of more than 65535 samples is not divided (all 0).
 struct Brick {
     uint64_t occupied = 0;
+    // Per Side: the occupied voxels whose count on that side is not zero. A direction ω sees
+    // one side per axis (the one its sign points to), so only the voxels of those three masks
+    // can occlude along it.
+    uint64_t sides[kSideCount] = {};
     uint32_t firstVoxel = 0;
     uint32_t firstSample = 0;
     uint32_t sampleCount = 0;

@@ -176,18 +176,19 @@ static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i
 }
 
 // The brick's occupied voxels that the cylinder meets become occluders, walked over the set
-// bits in order (the rank of a bit is where its counts are); then its samples, by octant.
+// bits (the rank of a bit among the occupied ones is where its counts are); then its
+// samples, by octant.
 void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
     prefetchSamples(eye_.position, brick);  // wanted after the occluders: no waiting then
     int i0[3], i1[3];
     metRange(e, i0, i1);
-    const uint64_t candidates = brick.occupied & brickRangeMask(e, i0, i1);
-    uint32_t rank = 0;
-    for (uint64_t bits = candidates ? brick.occupied : 0; bits; bits &= bits - 1, ++rank) {
+    // Only voxels with counts on a side ω sees can occlude (the others would add 0).
+    const uint64_t occluding = brick.sides[side_[0]] | brick.sides[side_[1]] | brick.sides[side_[2]];
+    for (uint64_t bits = occluding & brickRangeMask(e, i0, i1); bits; bits &= bits - 1) {
         const int bit = __builtin_ctzll(bits);
-        if (!(candidates >> bit & 1)) continue;
         const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
         if (!surelyMet(Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f)) && !voxelMet(x, y, z)) continue;
+        const uint32_t rank = uint32_t(__builtin_popcountll(brick.occupied & ((uint64_t(1) << bit) - 1)));
         addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
     }
     const size_t before = s_.samples.size();
