@@ -62,6 +62,8 @@
 #pragma once
 
 #include <climits>
+#include <memory>
+#include <utility>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -123,6 +125,29 @@ inline int majorAxis(const Vec3& w) {
 
 }  // namespace kd_detail
 
+// std::allocator, but a resize leaves the new elements default-initialised (for the events:
+// not zeroed), as they are written right after.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = UninitializedAllocator<U>;
+    };
+    UninitializedAllocator() = default;
+    template <class U>
+    UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
+template <class T>
+using EventVector = std::vector<T, UninitializedAllocator<T>>;
+
 // Per-thread scratch: the stack, the mask and the event lists grow to the largest cylinder
 // seen and are reused, so traversal allocates nothing in steady state.
 class TraversalScratch {
@@ -130,8 +155,8 @@ public:
     std::vector<kd_detail::StackEntry> stack;
     std::vector<kd_detail::FillCell> fill;
     std::vector<float> sweep;
-    std::vector<kd_detail::OccluderEvent> occluders, occludersSorted;
-    std::vector<kd_detail::SampleEvent> samples, samplesSorted;
+    EventVector<kd_detail::OccluderEvent> occluders, occludersSorted;
+    EventVector<kd_detail::SampleEvent> samples, samplesSorted;
     std::vector<uint32_t> unshadowed;  // reached samples that read V = 1 in any slice
     std::vector<uint32_t> histogram;
     std::vector<int> rowLo, rowHi;  // the valid cells of each mask row
@@ -230,8 +255,8 @@ void CylinderTraversal::sweep(Visit&& visit) {
     for (uint32_t i : s_.unshadowed) visit(i, 1.f);
     st_.samplesVisited += s_.unshadowed.size();
     size_t is = 0, io = 0;
-    const std::vector<SampleEvent>& samples = s_.samplesSorted;
-    const std::vector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
+    const EventVector<SampleEvent>& samples = s_.samplesSorted;
+    const EventVector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
     for (int slice = sliceMin_; slice <= sliceMax_ && is < samples.size(); ++slice) {
         for (; is < samples.size() && samples[is].slice == slice; ++is) {
             const float vis = read(samples[is]);
