@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "core/sampling.h"
 
@@ -41,33 +42,11 @@ ScrambledHalton::ScrambledHalton(uint64_t seed, int dimensions) : seed_(seed) {
 namespace {
 
 // The scrambled radical inverse's digits: `digits` permuted digits of index in base b, most
-// significant last. A constant base lets the compiler divide by multiplying.
-template <uint64_t B>
-uint64_t reverseDigits(uint64_t index, int digits, const uint16_t* perm) {
-    uint64_t reversed = 0;
-    for (int k = 0; k < digits; ++k) {
-        const uint64_t next = index / B;
-        reversed = reversed * B + perm[size_t(k) * B + (index - next * B)];
-        index = next;
-    }
-    return reversed;
-}
-
-uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm) {
-    switch (b) {
-        case 2: return reverseDigits<2>(index, digits, perm);
-        case 3: return reverseDigits<3>(index, digits, perm);
-        case 5: return reverseDigits<5>(index, digits, perm);
-        case 7: return reverseDigits<7>(index, digits, perm);
-        case 11: return reverseDigits<11>(index, digits, perm);
-        case 13: return reverseDigits<13>(index, digits, perm);
-        case 17: return reverseDigits<17>(index, digits, perm);
-        case 19: return reverseDigits<19>(index, digits, perm);
-        case 23: return reverseDigits<23>(index, digits, perm);
-        case 29: return reverseDigits<29>(index, digits, perm);
-        case 31: return reverseDigits<31>(index, digits, perm);
-        default: break;
-    }
+// significant last. Base is a std::integral_constant for the small primes, so that the
+// compiler divides by multiplying, or a plain uint64_t.
+template <class Base>
+uint64_t reverseDigits(Base base, uint64_t index, int digits, const uint16_t* perm) {
+    const uint64_t b = base;
     uint64_t reversed = 0;
     for (int k = 0; k < digits; ++k) {
         const uint64_t next = index / b;
@@ -75,6 +54,26 @@ uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* p
         index = next;
     }
     return reversed;
+}
+
+template <uint64_t B>
+using Prime = std::integral_constant<uint64_t, B>;
+
+uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm) {
+    switch (b) {
+        case 2: return reverseDigits(Prime<2>(), index, digits, perm);
+        case 3: return reverseDigits(Prime<3>(), index, digits, perm);
+        case 5: return reverseDigits(Prime<5>(), index, digits, perm);
+        case 7: return reverseDigits(Prime<7>(), index, digits, perm);
+        case 11: return reverseDigits(Prime<11>(), index, digits, perm);
+        case 13: return reverseDigits(Prime<13>(), index, digits, perm);
+        case 17: return reverseDigits(Prime<17>(), index, digits, perm);
+        case 19: return reverseDigits(Prime<19>(), index, digits, perm);
+        case 23: return reverseDigits(Prime<23>(), index, digits, perm);
+        case 29: return reverseDigits(Prime<29>(), index, digits, perm);
+        case 31: return reverseDigits(Prime<31>(), index, digits, perm);
+        default: return reverseDigits<uint64_t>(b, index, digits, perm);
+    }
 }
 
 }  // namespace
