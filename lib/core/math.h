@@ -58,6 +58,20 @@ inline void clipUpperFace(float o, float w, float r, float hi, float& t0, float&
     else if (d < 0.f) t0 = kInf;
 }
 
+// The half-extents r_a = radius·sqrt(1 − ω_a²) of the disc perpendicular to the unit ω.
+inline void discHalfExtents(const Vec3& w, float radius, float r[3]) {
+    for (int a = 0; a < 3; ++a) r[a] = radius * std::sqrt(std::max(0.f, 1.f - w[a] * w[a]));
+}
+// All six faces of the box [lo, hi], axis by axis: [t0, t1] becomes the t-range whose disc
+// boxes (half-extents r) touch the box.
+inline void clipToBox(const Vec3& o, const Vec3& w, const float r[3], const Vec3& lo, const Vec3& hi, float& t0,
+                      float& t1) {
+    for (int a = 0; a < 3; ++a) {
+        clipLowerFace(o[a], w[a], r[a], lo[a], t0, t1);
+        clipUpperFace(o[a], w[a], r[a], hi[a], t0, t1);
+    }
+}
+
 // Right-handed orthonormal frame around a unit normal (Duff et al.'s branchless basis).
 struct Frame {
     Vec3 s, t, n;

@@ -19,7 +19,7 @@ public:
     explicit TriangleBvh(const Scene& scene);
 
     // Calls visit(triangle) for every triangle whose bounding box the cylinder o + tω,
-    // t ∈ [t0, t1], of radius r touches (the disc boxes of math.h's clipLowerFace: a superset
+    // t ∈ [t0, t1], of radius r touches (the disc boxes of math.h's clipToBox: a superset
     // of the triangles the cylinder meets), in no particular order, until visit returns
     // false; then returns false.
     template <class Visit>
@@ -47,13 +47,10 @@ template <class Visit>
 bool TriangleBvh::nearCylinder(const Vec3& o, const Vec3& w, float r, float t0, float t1, Visit&& visit) const {
     if (nodes_.empty()) return true;
     float ra[3];
-    for (int a = 0; a < 3; ++a) ra[a] = r * std::sqrt(std::max(0.f, 1.f - w[a] * w[a]));
+    discHalfExtents(w, r, ra);
     auto touches = [&](const Vec3& lo, const Vec3& hi) {
         float s0 = t0, s1 = t1;
-        for (int a = 0; a < 3; ++a) {
-            clipLowerFace(o[a], w[a], ra[a], lo[a], s0, s1);
-            clipUpperFace(o[a], w[a], ra[a], hi[a], s0, s1);
-        }
+        clipToBox(o, w, ra, lo, hi, s0, s1);
         return s0 <= s1;
     };
     uint32_t stack[64];  // median splits: depth ≤ log2(triangles) + 1

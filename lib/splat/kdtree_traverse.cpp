@@ -20,7 +20,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     hOcc_ = radius_ + kOccluderMargin;
     kernel2_ = radius_ * radius_;
     valid2_ = sqr(radius_ + kValidCellMargin);
-    for (int b = 0; b < 3; ++b) r_[b] = hOcc_ * std::sqrt(std::max(0.f, 1.f - w_[b] * w_[b]));
+    discHalfExtents(w_, hOcc_, r_);
     kU_ = w_[U_] / w_[N_], kV_ = w_[V_] / w_[N_];
     forward_ = w_[N_] >= 0.f;
     dimN_ = g_.dims[N_];
@@ -102,10 +102,7 @@ void CylinderTraversal::findValidRows() {
 // From the root, the part of [0, L] whose disc boxes touch the grid, near child first.
 void CylinderTraversal::gather() {
     StackEntry root{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
-    for (int a = 0; a < 3; ++a) {
-        clipLowerFace(o_[a], w_[a], r_[a], 0.f, root.t0, root.t1);
-        clipUpperFace(o_[a], w_[a], r_[a], float(g_.dims[a]), root.t0, root.t1);
-    }
+    clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), root.t0, root.t1);
     s_.stack.clear();
     if (root.t0 <= root.t1) s_.stack.push_back(root);
     while (!s_.stack.empty()) {
@@ -363,11 +360,8 @@ bool CylinderTraversal::surelyMet(const Vec3& p) const {
 // for bit, as the one the splits narrowed down to its leaf).
 bool CylinderTraversal::voxelMet(int x, int y, int z) const {
     float t0 = 0.f, t1 = L_;
-    const int v[3] = {x, y, z};
-    for (int a = 0; a < 3; ++a) {
-        clipLowerFace(o_[a], w_[a], r_[a], float(v[a]), t0, t1);
-        clipUpperFace(o_[a], w_[a], r_[a], float(v[a] + 1), t0, t1);
-    }
+    const Vec3 lo{float(x), float(y), float(z)};
+    clipToBox(o_, w_, r_, lo, lo + 1.f, t0, t1);
     return t0 <= t1;
 }
 
