@@ -28,6 +28,12 @@ inline bool isFinite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 inline float sqr(float x) { return x * x; }
+// int(std::floor(x)) for finite x inside int's range, without the library call or rounding
+// mode change that floor costs where SSE4.1 is not assumed.
+inline int floorToInt(float x) {
+    const int i = int(x);
+    return i - (x < float(i));
+}
 
 struct Bounds3 {
     Vec3 lo{kInf};

@@ -22,6 +22,9 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     valid2_ = sqr(radius_ + kValidCellMargin);
     discHalfExtents(w_, hOcc_, r_);
     kU_ = w_[U_] / w_[N_], kV_ = w_[V_] / w_[N_];
+    aU_ = Vec3(0.f), aV_ = Vec3(0.f);
+    aU_[U_] = 1.f, aU_[N_] = -kU_;
+    aV_[V_] = 1.f, aV_[N_] = -kV_;
     forward_ = w_[N_] >= 0.f;
     dimN_ = g_.dims[N_];
     // Occluders: the back-facing sides along ω, projected onto the N plane; ambiguous voxels
@@ -43,7 +46,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     halfV_ = int(std::ceil(r_[V_] + 1.f + (r_[N_] + 1.f) * std::abs(kV_))) + 2;
     sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
     const size_t cells = size_t(sizeU_) * size_t(sizeV_);
-    if (s_.fill.size() < cells) s_.fill.resize(cells), s_.sweep.resize(cells);
+    if (s_.fill.size() < cells) s_.fill.resize(cells), s_.sweep.resize(cells), s_.shadowable.resize(cells);
     findValidRows();
     if (++s_.stamp == 0) {
         for (FillCell& c : s_.fill) c.stamp = 0;
@@ -52,6 +55,14 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     stamp_ = s_.stamp;
     s_.occluders.clear();
     s_.samples.clear();
+    s_.bricks.clear();
+}
+
+// The sweep mask and the shadowable map are all zero between cylinders: clear what this one
+// touched.
+CylinderTraversal::~CylinderTraversal() {
+    for (const OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
+    markShadowable(0);
 }
 
 // Cell (i, j), relative to the mask centre: its centre within h + margin of the axis line.
@@ -99,7 +110,9 @@ void CylinderTraversal::findValidRows() {
 
 // -- Gathering occluders and samples (§5.1–5.3) ----------------------------------------------
 
-// From the root, the part of [0, L] whose disc boxes touch the grid, near child first.
+// From the root, the part of [0, L] whose disc boxes touch the grid, near child first. Pruning
+// depends on the occluders alone, so walking the samples afterwards (visitSamples) leaves the
+// nodes visited and the occluders found as they were.
 void CylinderTraversal::gather() {
     StackEntry root{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
     clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), root.t0, root.t1);
@@ -118,7 +131,7 @@ void CylinderTraversal::gather() {
         switch (node.type()) {
             case NodeType::Empty: break;
             case NodeType::Split: descend(e, node); break;
-            case NodeType::Brick: gatherBrick(e, tree_.bricks[node.brick()]); break;
+            case NodeType::Brick: gatherBrick(e, node.brick()); break;
             case NodeType::Occlusion: gatherOcclusionBlock(e, node); break;
         }
     }
@@ -173,10 +186,14 @@ static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i
 }
 
 // The brick's occupied voxels that the cylinder meets become occluders, walked over the set
-// bits (the rank of a bit among the occupied ones is where its counts are); then its
-// samples, by octant.
-void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
-    prefetchSamples(eye_.position, brick);  // wanted after the occluders: no waiting then
+// bits (the rank of a bit among the occupied ones is where its counts are); a brick with
+// samples is kept for visitSamples, its sample positions asked for now.
+void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
+    const Brick& brick = tree_.bricks[index];
+    if (brick.sampleCount > 0) {
+        prefetchSamples(eye_.position, brick);  // wanted in visitSamples: no waiting then
+        s_.bricks.push_back({e, index});
+    }
     int i0[3], i1[3];
     metRange(e, i0, i1);
     // Only voxels with counts on a side ω sees can occlude (the others would add 0).
@@ -188,70 +205,114 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, const Brick& brick) {
         const uint32_t rank = uint32_t(__builtin_popcountll(brick.occupied & ((uint64_t(1) << bit) - 1)));
         addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
     }
-    const size_t before = s_.samples.size();
-    if (!brick.divided()) {
-        gatherBrickSamples(e, brick.firstSample, brick.firstSample + brick.sampleCount);
-    } else {
-        for (int k = 0; k < 8; ++k) {
-            const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
-            if (first != last && octantMayBeReached(e, k)) gatherBrickSamples(e, first, last);
+}
+
+// -- Reaching the samples (§5.1) --------------------------------------------------------------
+
+// Marks (value 1) or clears (0) the cells (i0, j0) whose 2×2 bilinear block (i0…i0+1,
+// j0…j0+1) holds an occluder's cell: a sample whose block starts at an unmarked cell reads 0 in
+// every slice, so V = 1.
+void CylinderTraversal::markShadowable(uint8_t value) {
+    for (const OccluderEvent& ev : s_.occluders) {
+        const int cu = ev.cell % sizeU_, cv = ev.cell / sizeU_;
+        uint8_t* row = &s_.shadowable[size_t(ev.cell)];
+        row[0] = value;
+        if (cu > 0) row[-1] = value;
+        if (cv > 0) {
+            row[-sizeU_] = value;
+            if (cu > 0) row[-sizeU_ - 1] = value;
         }
     }
-    // What the splat reads of a reached sample, on its way while the sweep runs.
-    if (s_.samples.size() != before)
-        prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
-            prefetchSamples(eye_.pixel, brick);
+}
+
+// Whether a sample whose bilinear block starts at mask cell (i0, j0) may read an occluder.
+inline bool CylinderTraversal::shadowable(int i0, int j0) const {
+    if (unsigned(i0) < unsigned(sizeU_) && unsigned(j0) < unsigned(sizeV_))
+        return s_.shadowable[size_t(i0) + size_t(sizeU_) * size_t(j0)] != 0;
+    return touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1);
+}
+
+// A met brick's samples, by octant (those out of the cylinder's reach are skipped); what the
+// splat reads of a reached sample is asked for first.
+void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
+    const Brick& brick = tree_.bricks[met.brick];
+    prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
+        prefetchSamples(eye_.pixel, brick);
+    s_.unshadowed.resize(brick.sampleCount);
+    s_.unshadowed.clear();
+    if (!brick.divided()) {
+        gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount);
+        return;
+    }
+    for (int k = 0; k < 8; ++k) {
+        const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
+        if (first != last && octantMayBeReached(met.entry, k)) gatherSampleRange(met.entry, first, last);
+    }
 }
 
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
-// voxel (clamped to the brick, where the tree put it) gives its slice. The tests run four
-// samples at a time where SSE is there (the same operations in the same order as reached(),
-// so the same answers); the events are then written for the reached ones.
-void CylinderTraversal::gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last) {
+// projection (u, v) gives its bilinear block; those no occluder can shadow go to the brick's
+// unshadowed list, the others become sample events, their voxel (clamped to the brick, where
+// the tree put it) giving their slice. Four samples at a time where SSE is there (the same
+// operations in the same order as the scalar reach(), so the same answers).
+void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last) {
     // The events are written field by field into room made first: a pushed temporary would be
     // built on the stack and reloaded whole, a store-forwarding stall per sample.
-    size_t n = s_.samples.size();
+    size_t n = s_.samples.size(), free = s_.unshadowed.size();
     s_.samples.resize(n + (last - first));
-    auto add = [&](uint32_t i, const Vec3& p) {
-        const int vN = std::clamp(int(std::floor(p[N_])), int(e.lo[N_]), int(e.hi[N_]) - 1);
+    s_.unshadowed.resize(free + (last - first));
+    const int sliceLo = e.lo[N_], sliceHi = int(e.hi[N_]) - 1;
+    auto add = [&](uint32_t i, const Reach& r) {
+        if (!shadowable(r.i0, r.j0)) {
+            s_.unshadowed[free++] = i;
+            return;
+        }
         SampleEvent& ev = s_.samples[n++];
         ev.index = i;
-        ev.slice = sliceOf(vN);
-        ev.u = (p[U_] - o_[U_]) - kU_ * (p[N_] - o_[N_]);
-        ev.v = (p[V_] - o_[V_]) - kV_ * (p[N_] - o_[N_]);
+        ev.slice = sliceOf(std::clamp(r.voxelN, sliceLo, sliceHi));
+        ev.u = r.u;
+        ev.v = r.v;
     };
+    const size_t before = n + free;
     uint32_t i = first;
 #if defined(__SSE2__)
     for (; i + 4 <= last; i += 4) {
-        Vec3 p[4];
-        for (uint32_t bits = reached4(&eye_.position[i], p); bits; bits &= bits - 1) {
+        Reach4 r;
+        for (uint32_t bits = reach4(&eye_.position[i], r); bits; bits &= bits - 1) {
             const int k = __builtin_ctz(bits);
-            add(i + uint32_t(k), p[k]);
+            add(i + uint32_t(k), Reach{r.u[k], r.v[k], r.i0[k], r.j0[k], r.voxelN[k]});
         }
     }
 #endif
     for (; i < last; ++i) {
-        const Vec3 p = (eye_.position[i] - g_.origin) * invVoxel_;
-        if (reached(p)) add(i, p);
+        Reach r;
+        if (reach(eye_.position[i], r)) add(i, r);
     }
-    st_.samplesReached += n - (s_.samples.size() - (last - first));
+    st_.samplesReached += n + free - before;
     s_.samples.resize(n);
+    s_.unshadowed.resize(free);
 }
 
-// A sample at p (voxel space) is reached: depth in (0, L], within h of the axis line, in
-// front of the origin's tangent plane.
-inline bool CylinderTraversal::reached(const Vec3& p) const {
+// A sample at world position y is reached: at p = its voxel-space position, depth in (0, L],
+// within h of the axis line, in front of the origin's tangent plane. Then its projection:
+// u = (p − o)·aU, v = (p − o)·aV (aU = e_U − k_U e_N: the same value as (p_U − o_U) −
+// k_U (p_N − o_N)), the bilinear block's first cell (i0, j0) and the voxel layer along N.
+inline bool CylinderTraversal::reach(const Vec3& y, Reach& r) const {
+    const Vec3 p = (y - g_.origin) * invVoxel_;
     const Vec3 d = p - o_;
     const float along = glm::dot(d, w_);
     if (!(along > 0.f && along <= L_) || glm::dot(d, d) - along * along >= kernel2_) return false;
-    return !hasNormal_ || !(glm::dot(d, n_) <= 0.f);
+    if (hasNormal_ && glm::dot(d, n_) <= 0.f) return false;
+    r.u = glm::dot(d, aU_), r.v = glm::dot(d, aV_);
+    r.i0 = floorToInt(r.u - 0.5f) + halfU_, r.j0 = floorToInt(r.v - 0.5f) + halfV_;
+    r.voxelN = floorToInt(p[N_]);
+    return true;
 }
 
 #if defined(__SSE2__)
-// reached() for the four samples at `world` (world space, consecutive), bit k for sample k;
-// their voxel-space positions go to p. Each comparison is the negation reached() rejects by,
-// so a NaN goes the same way.
-uint32_t CylinderTraversal::reached4(const Vec3* world, Vec3 p[4]) const {
+// reach() for the four samples at `world` (consecutive), bit k for sample k. Each comparison is
+// the negation reach() rejects by, so a NaN goes the same way.
+uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
     // Four packed xyz triples to x, y, z lanes.
     const float* f = &world[0].x;
     const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);
@@ -261,11 +322,11 @@ uint32_t CylinderTraversal::reached4(const Vec3* world, Vec3 p[4]) const {
     const __m128 wz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
                                      _MM_SHUFFLE(2, 0, 2, 0));
     const __m128 inv = _mm_set1_ps(invVoxel_);
-    const __m128 px = _mm_mul_ps(_mm_sub_ps(wx, _mm_set1_ps(g_.origin.x)), inv);
-    const __m128 py = _mm_mul_ps(_mm_sub_ps(wy, _mm_set1_ps(g_.origin.y)), inv);
-    const __m128 pz = _mm_mul_ps(_mm_sub_ps(wz, _mm_set1_ps(g_.origin.z)), inv);
-    const __m128 dx = _mm_sub_ps(px, _mm_set1_ps(o_.x)), dy = _mm_sub_ps(py, _mm_set1_ps(o_.y)),
-                 dz = _mm_sub_ps(pz, _mm_set1_ps(o_.z));
+    const __m128 p[3] = {_mm_mul_ps(_mm_sub_ps(wx, _mm_set1_ps(g_.origin.x)), inv),
+                         _mm_mul_ps(_mm_sub_ps(wy, _mm_set1_ps(g_.origin.y)), inv),
+                         _mm_mul_ps(_mm_sub_ps(wz, _mm_set1_ps(g_.origin.z)), inv)};
+    const __m128 dx = _mm_sub_ps(p[0], _mm_set1_ps(o_.x)), dy = _mm_sub_ps(p[1], _mm_set1_ps(o_.y)),
+                 dz = _mm_sub_ps(p[2], _mm_set1_ps(o_.z));
     auto dot = [&](const Vec3& v) {
         return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_set1_ps(v.x)), _mm_mul_ps(dy, _mm_set1_ps(v.y))),
                           _mm_mul_ps(dz, _mm_set1_ps(v.z)));
@@ -276,11 +337,17 @@ uint32_t CylinderTraversal::reached4(const Vec3* world, Vec3 p[4]) const {
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), _mm_set1_ps(kernel2_)));
     if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot(n_), _mm_setzero_ps()));
     const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
-    if (bits) {
-        alignas(16) float x[4], y[4], z[4];
-        _mm_store_ps(x, px), _mm_store_ps(y, py), _mm_store_ps(z, pz);
-        for (int k = 0; k < 4; ++k) p[k] = Vec3(x[k], y[k], z[k]);
-    }
+    if (!bits) return 0;
+    // floorToInt four at a time: truncate, then step down where that went up.
+    auto floor4 = [](__m128 x) {
+        const __m128i t = _mm_cvttps_epi32(x);
+        return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
+    };
+    const __m128 u = dot(aU_), v = dot(aV_), half = _mm_set1_ps(0.5f);
+    _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floor4(_mm_sub_ps(u, half)), _mm_set1_epi32(halfU_)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floor4(_mm_sub_ps(v, half)), _mm_set1_epi32(halfV_)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.voxelN), floor4(p[N_]));
     return bits;
 }
 #endif
@@ -311,8 +378,8 @@ void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel
     if (occ <= 0.f) return;
     const int v[3] = {ix, iy, iz};
     const int slice = sliceOf(v[N_]) + (voxel.ambiguous() ? ambOffset_[voxel.dominantAxis()] : 0);
-    const int cu = int(std::floor((c[U_] - o_[U_]) - kU_ * (c[N_] - o_[N_]))) + halfU_;
-    const int cv = int(std::floor((c[V_] - o_[V_]) - kV_ * (c[N_] - o_[N_]))) + halfV_;
+    const int cu = floorToInt((c[U_] - o_[U_]) - kU_ * (c[N_] - o_[N_])) + halfU_;
+    const int cv = floorToInt((c[V_] - o_[V_]) - kV_ * (c[N_] - o_[N_])) + halfV_;
     if (cu < 0 || cv < 0 || cu >= sizeU_ || cv >= sizeV_) {
         ++st_.maskOverflow;
         return;
@@ -407,23 +474,11 @@ bool CylinderTraversal::prunable(const StackEntry& e) const {
 
 // -- The slice sweep (§5.1) -------------------------------------------------------------------
 
-// Splits the reached samples: those none of whose four bilinear cells holds an occluder read
-// 0 in any slice (V = 1); the others are sorted by slice, as are the occluders (counting sort,
-// stable). Occluders before the first sample's slice are read by every sample: added at once.
+// Sorts the shadowable samples by slice, as the occluders (counting sort, stable). Occluders
+// before the first sample's slice are read by every sample: added at once.
 void CylinderTraversal::prepareSweep() {
-    s_.unshadowed.clear();
     s_.samplesSorted.clear();
     s_.occludersSorted.clear();
-    size_t kept = 0;
-    for (const SampleEvent& ev : s_.samples) {
-        const int i0 = int(std::floor(ev.u - 0.5f)) + halfU_, j0 = int(std::floor(ev.v - 0.5f)) + halfV_;
-        if (!s_.occluders.empty() &&
-            (touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1)))
-            s_.samples[kept++] = ev;
-        else
-            s_.unshadowed.push_back(ev.index);
-    }
-    s_.samples.resize(kept);
     if (s_.samples.empty()) {
         sliceMin_ = 0, sliceMax_ = -1;
         return;

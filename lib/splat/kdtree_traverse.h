@@ -110,6 +110,10 @@ struct SampleEvent {
     int32_t slice;
     float u, v;
 };
+struct MetBrick {  // a brick leaf the cylinder meets, with its part of the cylinder
+    StackEntry entry;
+    uint32_t brick;
+};
 struct FillCell {  // early-exit bookkeeping, valid when stamp matches the cylinder
     uint32_t stamp = 0;
     float sum = 0;
@@ -155,22 +159,30 @@ public:
     std::vector<kd_detail::StackEntry> stack;
     std::vector<kd_detail::FillCell> fill;
     std::vector<float> sweep;
+    std::vector<uint8_t> shadowable;  // per mask cell: one of the 2×2 cells from it on holds an occluder
+    std::vector<kd_detail::MetBrick> bricks;  // the met bricks that hold samples, in kd order
     EventVector<kd_detail::OccluderEvent> occluders, occludersSorted;
     EventVector<kd_detail::SampleEvent> samples, samplesSorted;
-    std::vector<uint32_t> unshadowed;  // reached samples that read V = 1 in any slice
+    EventVector<uint32_t> unshadowed;  // one brick's reached samples that read V = 1 in any slice
     std::vector<uint32_t> histogram;
     std::vector<int> rowLo, rowHi;  // the valid cells of each mask row
     uint32_t stamp = 0;
 };
 
 // One cylinder's traversal, in the paper's steps: the mask is set up by the constructor
-// (§5.1), gather() walks the tree near to far and collects the met occluders and the reached
-// samples (§5.1–5.3), sweep() reads each sample's visibility slice by slice (§5.1).
+// (§5.1); gather() walks the tree near to far and collects the met occluders and the met
+// bricks that hold samples (§5.1–5.3); visitSamples() reaches the samples of those bricks and
+// hands over at once, while the brick's arrays are in cache, the ones that read V = 1 in any
+// slice (none of their bilinear cells holds an occluder: 90 % of them at the paper's settings on
+// the glossy box); sweep() reads the others' visibility slice by slice (§5.1).
 class CylinderTraversal {
 public:
     CylinderTraversal(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl, TraversalScratch& s);
+    ~CylinderTraversal();
 
     void gather();
+    template <class Visit>
+    void visitSamples(Visit&& visit);
     template <class Visit>
     void sweep(Visit&& visit);
     const TraversalStats& stats() const { return st_; }
@@ -188,18 +200,31 @@ private:
     // Gathering.
     void descend(const StackEntry& e, Node node);
     void prefetchNode(uint32_t index) const;
-    void gatherBrick(const StackEntry& e, const Brick& brick);
-    void gatherBrickSamples(const StackEntry& e, uint32_t first, uint32_t last);
-    bool reached(const Vec3& p) const;
-    uint32_t reached4(const Vec3* world, Vec3 p[4]) const;
+    void gatherBrick(const StackEntry& e, uint32_t index);
     void gatherOcclusionBlock(const StackEntry& e, Node node);
     void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
     void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;
     void metRange(const StackEntry& e, int i0[3], int i1[3]) const;
     bool surelyMet(const Vec3& p) const;
     bool voxelMet(int x, int y, int z) const;
-    bool octantMayBeReached(const StackEntry& e, int k) const;
     bool prunable(const StackEntry& e) const;
+
+    // Reaching the samples.
+    void markShadowable(uint8_t value);
+    void gatherBrickSamples(const kd_detail::MetBrick& met);
+    struct Reach {  // a reached sample: its (u, v), first bilinear cell and voxel layer along N
+        float u, v;
+        int i0, j0, voxelN;
+    };
+    struct Reach4 {
+        alignas(16) float u[4], v[4];
+        alignas(16) int i0[4], j0[4], voxelN[4];
+    };
+    void gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last);
+    bool reach(const Vec3& world, Reach& r) const;
+    uint32_t reach4(const Vec3* world, Reach4& r) const;
+    bool octantMayBeReached(const StackEntry& e, int k) const;
+    bool shadowable(int i0, int j0) const;
 
     // Sweep.
     void prepareSweep();
@@ -214,6 +239,7 @@ private:
     TraversalScratch& s_;
     TraversalStats st_;
     Vec3 o_, w_, n_;
+    Vec3 aU_, aV_;  // u = (p − o)·aU, v = (p − o)·aV
     float L_, radius_, invVoxel_, hOcc_, kernel2_, valid2_, kU_, kV_, tangentOffset_;
     float r_[3], occWeight_[3];
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
@@ -228,9 +254,9 @@ private:
 // nearest to the sample's (u, v), over the valid ones, the weights renormalised.
 inline float CylinderTraversal::read(const SampleEvent& ev) const {
     float x = ev.u - 0.5f, y = ev.v - 0.5f;
-    float fx0 = std::floor(x), fy0 = std::floor(y);
-    int i0 = int(fx0) + halfU_, j0 = int(fy0) + halfV_;
-    float fx = x - fx0, fy = y - fy0;
+    const int ix = floorToInt(x), iy = floorToInt(y);
+    int i0 = ix + halfU_, j0 = iy + halfV_;
+    float fx = x - float(ix), fy = y - float(iy);
     // Valid cells only; num ≤ den term by term, so occ ≤ 1 and four full cells give exactly 1.
     float num = 0.f, den = 0.f;
     auto cell = [&](int i, int j, float weight) {
@@ -247,13 +273,22 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
     return den > 0.f ? 1.f - num / den : 1.f;
 }
 
-// Unshadowed samples first; then slice by slice, a slice's samples read the mask before its
-// occluders enter it.
+// Brick by brick, in kd order: the reached samples that no occluder can shadow get V = 1 now;
+// the others become events for the sweep.
+template <class Visit>
+void CylinderTraversal::visitSamples(Visit&& visit) {
+    markShadowable(1);
+    for (const kd_detail::MetBrick& met : s_.bricks) {
+        gatherBrickSamples(met);
+        for (uint32_t i : s_.unshadowed) visit(i, 1.f);
+        st_.samplesVisited += s_.unshadowed.size();
+    }
+}
+
+// Slice by slice, a slice's samples read the mask before its occluders enter it.
 template <class Visit>
 void CylinderTraversal::sweep(Visit&& visit) {
     prepareSweep();
-    for (uint32_t i : s_.unshadowed) visit(i, 1.f);
-    st_.samplesVisited += s_.unshadowed.size();
     size_t is = 0, io = 0;
     const EventVector<SampleEvent>& samples = s_.samplesSorted;
     const EventVector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
@@ -264,8 +299,6 @@ void CylinderTraversal::sweep(Visit&& visit) {
         }
         for (; io < occluders.size() && occluders[io].slice == slice; ++io) s_.sweep[size_t(occluders[io].cell)] += occluders[io].occ;
     }
-    // The sweep mask is all zero between cylinders: clear what this one touched.
-    for (const kd_detail::OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
 }
 
 template <class Visit>
@@ -273,6 +306,7 @@ void traverseCylinder(const OcclusionTree& tree, const EyeSamples& eye, const Cy
                       Visit&& visit, TraversalStats* statsOut = nullptr) {
     CylinderTraversal traversal(tree, eye, cyl, s);
     traversal.gather();
+    traversal.visitSamples(visit);
     traversal.sweep(visit);
     if (statsOut) statsOut->add(traversal.stats());
 }
