@@ -263,7 +263,8 @@ TEST(VisibilityPlanes, TriangleBvhFindsWhatBruteForceFinds) {
 // Rule 2 by planes never contradicts Embree: a point the planes call visible from x(i−1) is
 // one Embree finds unoccluded (points all over each photon's cylinder, many of them behind
 // the pillar or the slab); and the splat gives the same film, to the bit, with the planes and
-// with an Embree ray for every receiver, while the planes spare most of those rays.
+// with an Embree ray for every receiver, while the planes spare most of those rays; receiving
+// four samples at a time gives the same film as one at a time.
 TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     const Scene s = furnishedRoom();
     ThreadPool pool(2);
@@ -315,6 +316,17 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     EXPECT_GT(sa.visibleByPlanes, sa.contributions / 20);  // 14 % here: the sphere has many triangles
     EXPECT_EQ(sa.visibilityRays + sa.visibleByPlanes, sb.visibilityRays);
     EXPECT_GT(sb.refused[SegmentReceivers::kHidden], 0u);
+
+    // Four samples at a time give what one at a time gives, to the bit.
+    SplatSettings oneByOne;
+    oneByOne.batches = false;
+    FixedFilm d(es.width, es.height);
+    SplatStats sd;
+    splatPhotons(accel, tree, eye.samples, photons, oneByOne, d, pool, silentReporter(), &sd);
+    for (int l = 0; l < FixedFilm::kBuffers; ++l) EXPECT_EQ(a.buffers[l], d.buffers[l]) << "buffer " << l;
+    EXPECT_EQ(sa.contributions, sd.contributions);
+    EXPECT_EQ(sa.visibleByPlanes, sd.visibleByPlanes);
+    EXPECT_EQ(sa.visibilityRays, sd.visibilityRays);
 }
 
 // Cornell box: the splat image against the path tracer at high spp. Relative MSE (per

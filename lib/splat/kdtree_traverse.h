@@ -4,7 +4,9 @@
 //          per-thread TraversalScratch and a visitor visit(uint32_t sample, float V).
 // Calls:   visit(i, V) once for every eye sample i the cylinder reaches whose visibility
 //          V = 1 − occlusion is > 0, in no particular order. The splat stage does its own
-//          kernel weight and normal tests; samples with V = 0 are not handed over.
+//          kernel weight and normal tests; samples with V = 0 are not handed over. A visitor
+//          that can also be called as visit(const uint32_t* index, size_t count) gets the
+//          samples with V = 1 that way, a brick's at a time.
 // Space:   voxel space; the cylinder axis is o + tω, t ∈ [0, L], radius h.
 //
 // Definitions (the brute force in tests/kdtree_test.cpp implements the same independently):
@@ -63,6 +65,7 @@
 
 #include <climits>
 #include <memory>
+#include <type_traits>
 #include <utility>
 #include <cmath>
 #include <cstdint>
@@ -151,6 +154,14 @@ struct UninitializedAllocator : std::allocator<T> {
 };
 template <class T>
 using EventVector = std::vector<T, UninitializedAllocator<T>>;
+
+// A visitor of several callables (one per kind of call, as std::visit's examples build it).
+template <class... Fns>
+struct Overloaded : Fns... {
+    using Fns::operator()...;
+};
+template <class... Fns>
+Overloaded(Fns...) -> Overloaded<Fns...>;
 
 // Per-thread scratch: the stack, the mask and the event lists grow to the largest cylinder
 // seen and are reused, so traversal allocates nothing in steady state.
@@ -280,7 +291,10 @@ void CylinderTraversal::visitSamples(Visit&& visit) {
     markShadowable(1);
     for (const kd_detail::MetBrick& met : s_.bricks) {
         gatherBrickSamples(met);
-        for (uint32_t i : s_.unshadowed) visit(i, 1.f);
+        if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
+            visit(static_cast<const uint32_t*>(s_.unshadowed.data()), s_.unshadowed.size());
+        else
+            for (uint32_t i : s_.unshadowed) visit(i, 1.f);
         st_.samplesVisited += s_.unshadowed.size();
     }
 }

@@ -7,6 +7,10 @@
 #include <algorithm>
 #include <mutex>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "scene/accel.h"
 #include "scene/scene.h"
 #include "core/stats.h"
@@ -198,11 +202,13 @@ Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility
 // kernel, orientation and receiver tests, into the thread's fixed-point buffer of its class.
 class PhotonSplat {
 public:
-    PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, bool visibility,
-                bool planes, int64_t* layer, SplatStats& stats)
+    PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, const SplatSettings& settings,
+                int64_t* layer, SplatStats& stats)
         : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), end_(ray.length + ray.radius * ray.reach),
-          visibility_(visibility), layer_(layer), stats_(stats), receivers_(accel, ray, visibility && planes), pending_(receivers_, stats) {}
+          kernelScale_(3.f / (kPi * h2_)), visibility_(settings.visibility), batches_(settings.batches), layer_(layer),
+          stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes), pending_(receivers_, stats) {}
 
+    // One sample, whose visibility by the mask is `visibility`.
     void receive(uint32_t i, float visibility) {
         // Only samples in front of the ray's origin, inside the kernel, facing the photon.
         const Vec3 w = ray_.dir;
@@ -226,31 +232,134 @@ public:
         const float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
         const Vec3 c = f * ray_.flux * scale;
         if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
-        int64_t* px = &layer_[size_t(samples_.pixel[i]) * 3];
         if (visibility_) {
             const Vec3 lifted = SegmentReceivers::lift(y, ng);
-            if (!receivers_.surelyVisible(lifted)) {
-                pending_.add(lifted, px, c);  // Embree decides, a packet at a time
-                return;
-            }
-            ++stats_.visibleByPlanes;
+            deposit(i, c, receivers_.surelyVisible(lifted), lifted);
+        } else {
+            deposit(i, c, true, y);
         }
-        PendingContributions::addFixed(px, c);
-        ++stats_.contributions;
     }
+
+    // Samples the mask leaves wholly visible (V = 1): the same as receive(i, 1) for each, four
+    // at a time where SSE is there.
+    void receiveUnshadowed(const uint32_t* index, size_t count) {
+        size_t k = 0;
+#if defined(__SSE2__)
+        if (visibility_ && batches_)
+            for (; k + 4 <= count; k += 4) receive4(index + k);
+#endif
+        for (; k < count; ++k) receive(index[k], 1.f);
+    }
+
     void finish() { pending_.flush(); }
 
 private:
+    // Into the film now when rule 2 is already decided (visible), else when Embree has said.
+    void deposit(uint32_t i, const Vec3& c, bool visible, const Vec3& lifted) {
+        int64_t* px = &layer_[size_t(samples_.pixel[i]) * 3];
+        if (!visible) {
+            pending_.add(lifted, px, c);  // Embree decides, a packet at a time
+            return;
+        }
+        if (visibility_) ++stats_.visibleByPlanes;
+        PendingContributions::addFixed(px, c);
+        ++stats_.contributions;
+    }
+#if defined(__SSE2__)
+    void receive4(const uint32_t* index);
+#endif
+
     const EyeSamples& samples_;
     const Vec3* const units_ = unitTable();
     const PhotonRay& ray_;
-    const float h2_, end_;
-    const bool visibility_;
+    const float h2_, end_, kernelScale_;
+    const bool visibility_, batches_;
     int64_t* layer_;
     SplatStats& stats_;
     const SegmentReceivers receivers_;
     PendingContributions pending_;
 };
+
+#if defined(__SSE2__)
+// receive(i, 1) for four samples (with visibility): every step the same operations in the same
+// order, one lane a sample, so the same sums; the BSDF is read lane by lane.
+void PhotonSplat::receive4(const uint32_t* index) {
+    struct Lanes {
+        __m128 x, y, z;
+        static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+            return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
+        }
+        __m128 dot(const Vec3& v) const {
+            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, _mm_set1_ps(v.x)), _mm_mul_ps(y, _mm_set1_ps(v.y))),
+                              _mm_mul_ps(z, _mm_set1_ps(v.z)));
+        }
+    };
+    const uint32_t i0 = index[0], i1 = index[1], i2 = index[2], i3 = index[3];
+    const Vec3* pos = samples_.position.data();
+    const Lanes y = Lanes::of(pos[i0], pos[i1], pos[i2], pos[i3]);
+    const uint16_t* nc = samples_.normal.data();
+    const uint16_t* gc = samples_.geomNormal.data();
+    const Lanes n = Lanes::of(units_[nc[i0]], units_[nc[i1]], units_[nc[i2]], units_[nc[i3]]);
+    const Lanes ng = Lanes::of(units_[gc[i0]], units_[gc[i1]], units_[gc[i2]], units_[gc[i3]]);
+    const Vec3 w = ray_.dir;
+    const Lanes oy{_mm_sub_ps(y.x, _mm_set1_ps(ray_.origin.x)), _mm_sub_ps(y.y, _mm_set1_ps(ray_.origin.y)),
+                   _mm_sub_ps(y.z, _mm_set1_ps(ray_.origin.z))};
+    const __m128 zero = _mm_setzero_ps();
+    // Inside the kernel, facing the photon (negated rejections: a NaN is rejected).
+    const __m128 t = oy.dot(w);
+    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, _mm_set1_ps(end_)));
+    const __m128 d2 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(oy.x, oy.x), _mm_mul_ps(oy.y, oy.y)), _mm_mul_ps(oy.z, oy.z)),
+                                 _mm_mul_ps(t, t));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, _mm_set1_ps(h2_)));
+    const __m128 cosTheta = n.dot(w);
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(cosTheta, zero));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(w), zero));
+    uint32_t live = uint32_t(_mm_movemask_ps(ok));
+    if (!live) return;
+    // Rule 1: in front of the origin's tangent plane.
+    const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(receivers_.originNormal()), zero))) : 15u;
+    if (const uint32_t behind = live & ~front) stats_.refused[SegmentReceivers::kBehindOrigin] += uint64_t(__builtin_popcount(behind));
+    live &= front;
+    if (!live) return;
+    // Equation (2)'s weight: biweightKernel(max(d2, 0), h2) · −cos θ (· V = 1).
+    const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), _mm_set1_ps(h2_)));
+    const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(kernelScale_), x), x));
+    const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
+    const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), _mm_set1_ps(1.f));
+    // w · f_r, lane by lane.
+    alignas(16) float nx[4], nyy[4], nz[4], mc[4], fx[4] = {}, fy[4] = {}, fz[4] = {};
+    _mm_store_ps(nx, n.x), _mm_store_ps(nyy, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
+    for (uint32_t bits = live; bits; bits &= bits - 1) {
+        const int k = __builtin_ctz(bits);
+        const Vec3 f = samples_.weightedF(index[k], Vec3(nx[k], nyy[k], nz[k]), -w, mc[k]);
+        fx[k] = f.x, fy[k] = f.y, fz[k] = f.z;
+    }
+    const Lanes c{_mm_mul_ps(_mm_mul_ps(_mm_load_ps(fx), _mm_set1_ps(ray_.flux.x)), scale),
+                  _mm_mul_ps(_mm_mul_ps(_mm_load_ps(fy), _mm_set1_ps(ray_.flux.y)), scale),
+                  _mm_mul_ps(_mm_mul_ps(_mm_load_ps(fz), _mm_set1_ps(ray_.flux.z)), scale)};
+    // Non-negative and finite.
+    const __m128 inf = _mm_set1_ps(INFINITY);
+    __m128 good = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(c.x, zero), _mm_cmplt_ps(c.x, inf)),
+                             _mm_and_ps(_mm_cmpge_ps(c.y, zero), _mm_cmplt_ps(c.y, inf)));
+    good = _mm_and_ps(good, _mm_and_ps(_mm_cmpge_ps(c.z, zero), _mm_cmplt_ps(c.z, inf)));
+    live &= uint32_t(_mm_movemask_ps(good));
+    if (!live) return;
+    // Rule 2: lifted off the surface (SegmentReceivers::lift), then the planes.
+    const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 largest = _mm_max_ps(_mm_and_ps(y.x, absMask), _mm_max_ps(_mm_and_ps(y.y, absMask), _mm_and_ps(y.z, absMask)));
+    const __m128 lift = _mm_mul_ps(_mm_set1_ps(1e-4f), _mm_add_ps(_mm_set1_ps(1.f), largest));
+    const Lanes lifted{_mm_add_ps(y.x, _mm_mul_ps(lift, ng.x)), _mm_add_ps(y.y, _mm_mul_ps(lift, ng.y)),
+                       _mm_add_ps(y.z, _mm_mul_ps(lift, ng.z))};
+    const uint32_t visible = receivers_.surelyVisible4(lifted.x, lifted.y, lifted.z);
+    alignas(16) float cx[4], cy[4], cz[4], lx[4], ly[4], lz[4];
+    _mm_store_ps(cx, c.x), _mm_store_ps(cy, c.y), _mm_store_ps(cz, c.z);
+    _mm_store_ps(lx, lifted.x), _mm_store_ps(ly, lifted.y), _mm_store_ps(lz, lifted.z);
+    for (uint32_t bits = live; bits; bits &= bits - 1) {
+        const int k = __builtin_ctz(bits);
+        deposit(index[k], Vec3(cx[k], cy[k], cz[k]), (visible >> k) & 1u, Vec3(lx[k], ly[k], lz[k]));
+    }
+}
+#endif
 
 // Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
 void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, FixedFilm& film) {
@@ -285,10 +394,10 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
         if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
         for (int64_t p = first + b; p < first + e; ++p) {
             const PhotonRay& ray = photons.rays[order[size_t(p)]];
-            PhotonSplat splat(accel, samples, ray, settings.visibility, settings.visibilityPlanes,
-                              &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
+            PhotonSplat splat(accel, samples, ray, settings, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
             traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
-                             [&](uint32_t i, float visibility) { splat.receive(i, visibility); },
+                             Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
+                                        [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); }},
                              &stats[thread].traversal);
             splat.finish();
         }

@@ -7,6 +7,10 @@
 // lands in the film layer of the photon's class (direct, indirect, caustic).
 #pragma once
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "output/film.h"
 #include "scene/accel.h"
 #include "splat/kdtree_traverse.h"
@@ -68,6 +72,23 @@ public:
             if (!(glm::dot(planes_[k].n, lifted) - planes_[k].d > planes_[k].margin)) return false;
         return true;
     }
+#if defined(__SSE2__)
+    // surelyVisible for four lifted points given by their coordinates' lanes: bit k for point k.
+    uint32_t surelyVisible4(__m128 x, __m128 y, __m128 z) const {
+        if (planeCount_ < 0) return 0;
+        __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+        for (int k = 0; k < planeCount_; ++k) {
+            const Plane& p = planes_[k];
+            const __m128 side = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(p.n.x), x), _mm_mul_ps(_mm_set1_ps(p.n.y), y)),
+                                           _mm_mul_ps(_mm_set1_ps(p.n.z), z));
+            all = _mm_and_ps(all, _mm_cmpgt_ps(_mm_sub_ps(side, _mm_set1_ps(p.d)), _mm_set1_ps(p.margin)));
+            if (_mm_movemask_ps(all) == 0) return 0;
+        }
+        return uint32_t(_mm_movemask_ps(all));
+    }
+#endif
+    bool hasOriginNormal() const { return hasOriginNormal_; }
+    const Vec3& originNormal() const { return originNormal_; }
     // Rule 2 by Embree for up to RayAccel::kPacket lifted points at once: bit i set when point
     // i is hidden from x(i−1).
     uint32_t hidden(const Vec3* lifted, int count) const;
@@ -103,6 +124,9 @@ struct SplatSettings {
     // Rule 2 decided by planes where they can (SegmentReceivers): the same image as asking
     // Embree every time (off), which the tests compare it with.
     bool visibilityPlanes = true;
+    // The samples the mask leaves wholly visible are received four at a time (SSE): the same
+    // operations lane by lane, so the same film as one at a time (off), which the tests compare.
+    bool batches = true;
     static constexpr int64_t kChunk = 256;
 };
 
