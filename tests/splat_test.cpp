@@ -260,7 +260,7 @@ TEST(VisibilityPlanes, TriangleBvhFindsWhatBruteForceFinds) {
     EXPECT_LT(bvh.bytes(), s.triangleCount() * 64);
 }
 
-// Rule 2 by planes never contradicts Embree: a point the planes call visible from x(i−1) is
+// Rule 2 by the triangles never contradicts Embree: a point they call visible from x(i−1) is
 // one Embree finds unoccluded (points all over each photon's cylinder, many of them behind
 // the pillar or the slab); and the splat gives the same film, to the bit, with the planes and
 // with an Embree ray for every receiver, while the planes spare most of those rays; receiving
@@ -313,7 +313,8 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     for (int l = 0; l < FixedFilm::kBuffers; ++l) EXPECT_EQ(a.buffers[l], b.buffers[l]) << "buffer " << l;
     EXPECT_EQ(sa.contributions, sb.contributions);
     EXPECT_EQ(sb.visibleByPlanes, 0u);
-    EXPECT_GT(sa.visibleByPlanes, sa.contributions / 20);  // 14 % here: the sphere has many triangles
+    // 34 % here (the sphere has many triangles); 14 % by the planes alone, without the edges.
+    EXPECT_GT(sa.visibleByPlanes, sa.contributions / 4);
     EXPECT_EQ(sa.visibilityRays + sa.visibleByPlanes, sb.visibilityRays);
     EXPECT_GT(sb.refused[SegmentReceivers::kHidden], 0u);
 

@@ -101,19 +101,23 @@ void SplatStats::add(const SplatStats& o) {
 SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes)
     : accel_(accel), origin_(ray.origin),
       originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {
-    if (withPlanes) findPlanes(ray);
+    if (withPlanes) findBlockers(ray);
 }
 
-// The planes of the triangles near the cylinder, oriented to x(i−1). The cylinder is widened
-// by twice the largest lift of a sample in it; a side counts only past a margin of
-// 1e-5 × (1 + the largest coordinate involved), far above the rounding of the plane's
-// equation (~1e-7 of it) and a tenth of the lift, which puts a sample on its surface's front.
-void SegmentReceivers::findPlanes(const PhotonRay& ray) {
+// The triangles near the cylinder: their planes oriented to x(i−1), and the planes through
+// x(i−1) and each edge. The cylinder is widened by twice the largest lift of a sample in it; a
+// side counts only past a margin of 1e-5 × (1 + the largest coordinate involved), far above
+// the rounding of the planes' equations (~1e-7 of it) and a tenth of the lift, which puts a
+// sample on its surface's front. An edge plane is made in double precision; one whose edge
+// points at x(i−1) (no plane) is never passed, so its triangle then blocks whatever is behind
+// its plane.
+void SegmentReceivers::findBlockers(const PhotonRay& ray) {
     const float o = std::max(std::abs(origin_.x), std::max(std::abs(origin_.y), std::abs(origin_.z)));
     const float length = ray.length + ray.radius * ray.reach;
     const float reach = o + length + ray.radius;
     const float widen = 2.f * rayOriginOffset(Vec3(reach));
     const Scene& scene = accel_.scene();
+    const glm::dvec3 x(origin_);
     int count = 0;
     const bool few = accel_.triangleBvh().nearCylinder(
         origin_, ray.dir, ray.radius + widen, -widen, length + widen, [&](uint32_t tri) {
@@ -122,19 +126,32 @@ void SegmentReceivers::findPlanes(const PhotonRay& ray) {
             const Vec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);
             const float area2 = glm::length(c);
             if (!(area2 > 0.f) || !std::isfinite(area2)) return false;  // no plane to decide by
-            Plane& plane = planes_[count];
-            plane.n = c / area2;
-            plane.d = glm::dot(plane.n, p[0]);
+            Blocker& b = blockers_[count];
+            b.n = c / area2;
+            b.d = glm::dot(b.n, p[0]);
             float extent = reach;
             for (int k = 0; k < 3; ++k) extent = std::max(extent, maxComponent(glm::abs(p[k])));
-            plane.margin = 1e-5f * (1.f + extent);
-            const float side = glm::dot(plane.n, origin_) - plane.d;
-            if (!(std::abs(side) > plane.margin)) return false;  // x(i−1) too close to call
-            if (side < 0.f) plane.n = -plane.n, plane.d = -plane.d;
+            b.margin = 1e-5f * (1.f + extent);
+            const float side = glm::dot(b.n, origin_) - b.d;
+            if (!(std::abs(side) > b.margin)) return false;  // x(i−1) too close to call
+            if (side < 0.f) b.n = -b.n, b.d = -b.d;
+            b.height = std::abs(side);
+            for (int k = 0; k < 3; ++k) {
+                const glm::dvec3 a = glm::dvec3(p[k]) - x, e = glm::dvec3(p[(k + 1) % 3]) - x;
+                const glm::dvec3 inside = glm::dvec3(p[(k + 2) % 3]) - x;
+                glm::dvec3 n = glm::cross(a, e);
+                const double len = glm::length(n);
+                if (!(len > 1e-6 * glm::length(a) * glm::length(e))) {
+                    b.edge[k] = Vec3(0.f);  // dot 0: never past the margin
+                    continue;
+                }
+                n /= len;
+                b.edge[k] = Vec3(glm::dot(n, inside) > 0.0 ? -n : n);
+            }
             ++count;
             return true;
         });
-    planeCount_ = few ? count : -1;
+    blockerCount_ = few ? count : -1;
 }
 
 uint32_t SegmentReceivers::hidden(const Vec3* lifted, int count) const {
