@@ -62,7 +62,10 @@ uint32_t encodeRgb9e5(const Vec3& c) {
 
 Vec3 EyeSamples::weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI) const {
     const uint32_t r = bsdf[i];
-    if (!isGlossy(r)) return decodeRgb9e5(r);
+    return isGlossy(r) ? glossyF(r, n, wi, cosI) : decodeRgb9e5(r);
+}
+
+Vec3 EyeSamples::glossyF(uint32_t r, const Vec3& n, const Vec3& wi, float cosI) const {
     const GlossyLobe& lobe = lobes[lobeIndex(r)];
     Vec3 f = decodeRgb9e5(lobe.diffuse);
     const Vec3 wo = decodeUnit(lobe.toViewer);

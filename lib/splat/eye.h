@@ -78,6 +78,8 @@ struct EyeSamples {
     // wi, given its decoded shading normal n and cosI = n·wi > 0 (bsdf.h's eval, from the
     // stored parts).
     Vec3 weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI) const;
+    // weightedF of a glossy sample, given its `bsdf` word.
+    Vec3 glossyF(uint32_t bsdf, const Vec3& n, const Vec3& wi, float cosI) const;
 
     // diffuse: weight × the Lambert f; lobe: the glossy part, if any (its diffuse is set here).
     void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, uint32_t pixel, const Vec3& diffuse,

@@ -185,7 +185,28 @@ public:
         }
         count_ = 0;
     }
+    // Adds c (non-negative, finite) to a pixel's three fixed-point sums.
     static void addFixed(int64_t* px, const Vec3& c) {
+#if defined(__SSE2__)
+        // toFixed two lanes at a time where every value is below 2^51: there x + 0.5 is the same
+        // double, and its truncation is the integer part of (x + 0.5) + 2^52 (round to nearest),
+        // less one where that rounded up.
+        const __m128d scale = _mm_set1_pd(kFixedScale), limit = _mm_set1_pd(2251799813685248.0);  // 2^51
+        const __m128d xy = _mm_mul_pd(_mm_cvtps_pd(_mm_setr_ps(c.x, c.y, 0.f, 0.f)), scale);
+        const __m128d z = _mm_mul_pd(_mm_cvtps_pd(_mm_set_ss(c.z)), scale);
+        if (_mm_movemask_pd(_mm_and_pd(_mm_cmplt_pd(xy, limit), _mm_cmplt_pd(z, limit))) == 3) {
+            auto truncHalfUp = [](__m128d x) {
+                const __m128d big = _mm_set1_pd(4503599627370496.0);  // 2^52
+                const __m128d y = _mm_add_pd(x, _mm_set1_pd(0.5)), r = _mm_add_pd(y, big);
+                const __m128i n = _mm_sub_epi64(_mm_castpd_si128(r), _mm_castpd_si128(big));
+                return _mm_add_epi64(n, _mm_castpd_si128(_mm_cmpgt_pd(_mm_sub_pd(r, big), y)));
+            };
+            __m128i* pxy = reinterpret_cast<__m128i*>(px);
+            _mm_storeu_si128(pxy, _mm_add_epi64(_mm_loadu_si128(pxy), truncHalfUp(xy)));
+            px[2] += _mm_cvtsi128_si64(truncHalfUp(z));
+            return;
+        }
+#endif
         px[0] += toFixed(c.x);
         px[1] += toFixed(c.y);
         px[2] += toFixed(c.z);
@@ -343,17 +364,30 @@ void PhotonSplat::receive4(const uint32_t* index) {
     const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(kernelScale_), x), x));
     const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
     const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), _mm_set1_ps(1.f));
-    // w · f_r, lane by lane.
-    alignas(16) float nx[4], nyy[4], nz[4], mc[4], fx[4] = {}, fy[4] = {}, fz[4] = {};
-    _mm_store_ps(nx, n.x), _mm_store_ps(nyy, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
-    for (uint32_t bits = live; bits; bits &= bits - 1) {
-        const int k = __builtin_ctz(bits);
-        const Vec3 f = samples_.weightedF(index[k], Vec3(nx[k], nyy[k], nz[k]), -w, mc[k]);
-        fx[k] = f.x, fy[k] = f.y, fz[k] = f.z;
+    // w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once); a glossy
+    // one's lobe is evaluated lane by lane.
+    const uint32_t* bsdf = samples_.bsdf.data();
+    const __m128i word = _mm_setr_epi32(int(bsdf[i0]), int(bsdf[i1]), int(bsdf[i2]), int(bsdf[i3]));
+    const __m128i nine = _mm_set1_epi32(511);
+    const __m128 unit = _mm_castsi128_ps(_mm_slli_epi32(_mm_add_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(127 - 24)), 23));
+    Lanes fl{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
+             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 9), nine)), unit),
+             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 18), nine)), unit)};
+    const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
+    if (glossy) {
+        alignas(16) float nx[4], nyy[4], nz[4], mc[4], fx[4], fy[4], fz[4];
+        _mm_store_ps(nx, n.x), _mm_store_ps(nyy, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
+        _mm_store_ps(fx, fl.x), _mm_store_ps(fy, fl.y), _mm_store_ps(fz, fl.z);
+        for (uint32_t bits = glossy; bits; bits &= bits - 1) {
+            const int k = __builtin_ctz(bits);
+            const Vec3 g = samples_.glossyF(bsdf[index[k]], Vec3(nx[k], nyy[k], nz[k]), -w, mc[k]);
+            fx[k] = g.x, fy[k] = g.y, fz[k] = g.z;
+        }
+        fl = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
     }
-    const Lanes c{_mm_mul_ps(_mm_mul_ps(_mm_load_ps(fx), _mm_set1_ps(ray_.flux.x)), scale),
-                  _mm_mul_ps(_mm_mul_ps(_mm_load_ps(fy), _mm_set1_ps(ray_.flux.y)), scale),
-                  _mm_mul_ps(_mm_mul_ps(_mm_load_ps(fz), _mm_set1_ps(ray_.flux.z)), scale)};
+    const Lanes c{_mm_mul_ps(_mm_mul_ps(fl.x, _mm_set1_ps(ray_.flux.x)), scale),
+                  _mm_mul_ps(_mm_mul_ps(fl.y, _mm_set1_ps(ray_.flux.y)), scale),
+                  _mm_mul_ps(_mm_mul_ps(fl.z, _mm_set1_ps(ray_.flux.z)), scale)};
     // Non-negative and finite.
     const __m128 inf = _mm_set1_ps(INFINITY);
     __m128 good = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(c.x, zero), _mm_cmplt_ps(c.x, inf)),
