@@ -53,6 +53,14 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
         s_.stamp = 1;
     }
     stamp_ = s_.stamp;
+#if defined(__SSE2__)
+    for (int a = 0; a < 3; ++a) {
+        wide_.gridOrigin[a] = _mm_set1_ps(g_.origin[a]), wide_.o[a] = _mm_set1_ps(o_[a]), wide_.w[a] = _mm_set1_ps(w_[a]);
+        wide_.n[a] = _mm_set1_ps(n_[a]), wide_.aU[a] = _mm_set1_ps(aU_[a]), wide_.aV[a] = _mm_set1_ps(aV_[a]);
+    }
+    wide_.invVoxel = _mm_set1_ps(invVoxel_), wide_.length = _mm_set1_ps(L_), wide_.kernel2 = _mm_set1_ps(kernel2_);
+    wide_.halfU = _mm_set1_epi32(halfU_), wide_.halfV = _mm_set1_epi32(halfV_);
+#endif
     s_.occluders.clear();
     s_.samples.clear();
     s_.bricks.clear();
@@ -321,21 +329,16 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
                                      _MM_SHUFFLE(2, 0, 2, 0));
     const __m128 wz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
                                      _MM_SHUFFLE(2, 0, 2, 0));
-    const __m128 inv = _mm_set1_ps(invVoxel_);
-    const __m128 p[3] = {_mm_mul_ps(_mm_sub_ps(wx, _mm_set1_ps(g_.origin.x)), inv),
-                         _mm_mul_ps(_mm_sub_ps(wy, _mm_set1_ps(g_.origin.y)), inv),
-                         _mm_mul_ps(_mm_sub_ps(wz, _mm_set1_ps(g_.origin.z)), inv)};
-    const __m128 dx = _mm_sub_ps(p[0], _mm_set1_ps(o_.x)), dy = _mm_sub_ps(p[1], _mm_set1_ps(o_.y)),
-                 dz = _mm_sub_ps(p[2], _mm_set1_ps(o_.z));
-    auto dot = [&](const Vec3& v) {
-        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, _mm_set1_ps(v.x)), _mm_mul_ps(dy, _mm_set1_ps(v.y))),
-                          _mm_mul_ps(dz, _mm_set1_ps(v.z)));
-    };
-    const __m128 along = dot(w_);
+    const __m128 p[3] = {_mm_mul_ps(_mm_sub_ps(wx, wide_.gridOrigin[0]), wide_.invVoxel),
+                         _mm_mul_ps(_mm_sub_ps(wy, wide_.gridOrigin[1]), wide_.invVoxel),
+                         _mm_mul_ps(_mm_sub_ps(wz, wide_.gridOrigin[2]), wide_.invVoxel)};
+    const __m128 dx = _mm_sub_ps(p[0], wide_.o[0]), dy = _mm_sub_ps(p[1], wide_.o[1]), dz = _mm_sub_ps(p[2], wide_.o[2]);
+    auto dot = [&](const __m128 v[3]) { return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, v[0]), _mm_mul_ps(dy, v[1])), _mm_mul_ps(dz, v[2])); };
+    const __m128 along = dot(wide_.w);
     const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, _mm_set1_ps(L_)));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), _mm_set1_ps(kernel2_)));
-    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot(n_), _mm_setzero_ps()));
+    __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), wide_.kernel2));
+    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot(wide_.n), _mm_setzero_ps()));
     const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
     if (!bits) return 0;
     // floorToInt four at a time: truncate, then step down where that went up.
@@ -343,10 +346,10 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
         const __m128i t = _mm_cvttps_epi32(x);
         return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
     };
-    const __m128 u = dot(aU_), v = dot(aV_), half = _mm_set1_ps(0.5f);
+    const __m128 u = dot(wide_.aU), v = dot(wide_.aV), half = _mm_set1_ps(0.5f);
     _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floor4(_mm_sub_ps(u, half)), _mm_set1_epi32(halfU_)));
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floor4(_mm_sub_ps(v, half)), _mm_set1_epi32(halfV_)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floor4(_mm_sub_ps(u, half)), wide_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floor4(_mm_sub_ps(v, half)), wide_.halfV));
     _mm_store_si128(reinterpret_cast<__m128i*>(r.voxelN), floor4(p[N_]));
     return bits;
 }

@@ -71,6 +71,10 @@
 #include <cstdint>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "splat/eye.h"
 #include "splat/kdtree.h"
 
@@ -259,6 +263,12 @@ private:
     uint32_t stamp_ = 0;
     size_t fullCount_ = 0;
     int sliceMin_ = 0, sliceMax_ = 0;  // the sweep's slices
+#if defined(__SSE2__)
+    struct Wide {  // reach4's numbers, each in all four lanes, set once a cylinder
+        __m128 gridOrigin[3], o[3], w[3], n[3], aU[3], aV[3], invVoxel, length, kernel2;
+        __m128i halfU, halfV;
+    } wide_;
+#endif
 };
 
 // V = 1 − the bilinear interpolation of the capped cell values between the 4 cell centres

@@ -152,7 +152,26 @@ void SegmentReceivers::findBlockers(const PhotonRay& ray) {
             return true;
         });
     blockerCount_ = few ? count : -1;
+#if defined(__SSE2__)
+    widenBlockers();
+#endif
 }
+
+#if defined(__SSE2__)
+// The blockers' numbers broadcast once a photon, not once every four samples.
+void SegmentReceivers::widenBlockers() {
+    for (int a = 0; a < 3; ++a) wide_.origin[a] = _mm_set1_ps(origin_[a]);
+    for (int k = 0; k < blockerCount_; ++k) {
+        const Blocker& b = blockers_[k];
+        WideBlocker& w = wide_.blockers[k];
+        for (int a = 0; a < 3; ++a) {
+            w.n[a] = _mm_set1_ps(b.n[a]);
+            for (int e = 0; e < 3; ++e) w.edge[e][a] = _mm_set1_ps(b.edge[e][a]);
+        }
+        w.d = _mm_set1_ps(b.d), w.margin = _mm_set1_ps(b.margin), w.height = _mm_set1_ps(b.height);
+    }
+}
+#endif
 
 uint32_t SegmentReceivers::hidden(const Vec3* lifted, int count) const {
     return accel_.occludedToPoint(lifted, count, origin_);
@@ -244,7 +263,15 @@ public:
                 int64_t* layer, SplatStats& stats)
         : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), end_(ray.length + ray.radius * ray.reach),
           kernelScale_(3.f / (kPi * h2_)), visibility_(settings.visibility), batches_(settings.batches), layer_(layer),
-          stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes), pending_(receivers_, stats) {}
+          stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes), pending_(receivers_, stats) {
+#if defined(__SSE2__)
+        for (int a = 0; a < 3; ++a) {
+            wide_.origin[a] = _mm_set1_ps(ray.origin[a]), wide_.dir[a] = _mm_set1_ps(ray.dir[a]);
+            wide_.flux[a] = _mm_set1_ps(ray.flux[a]), wide_.originNormal[a] = _mm_set1_ps(receivers_.originNormal()[a]);
+        }
+        wide_.end = _mm_set1_ps(end_), wide_.h2 = _mm_set1_ps(h2_), wide_.kernelScale = _mm_set1_ps(kernelScale_);
+#endif
+    }
 
     // One sample, whose visibility by the mask is `visibility`.
     void receive(uint32_t i, float visibility) {
@@ -316,6 +343,11 @@ private:
     SplatStats& stats_;
     const SegmentReceivers receivers_;
     PendingContributions pending_;
+#if defined(__SSE2__)
+    struct Wide {  // the ray's numbers for receive4, each in all four lanes, set once a photon
+        __m128 origin[3], dir[3], flux[3], originNormal[3], end, h2, kernelScale;
+    } wide_;
+#endif
 };
 
 #if defined(__SSE2__)
@@ -327,9 +359,8 @@ void PhotonSplat::receive4(const uint32_t* index) {
         static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
             return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
         }
-        __m128 dot(const Vec3& v) const {
-            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, _mm_set1_ps(v.x)), _mm_mul_ps(y, _mm_set1_ps(v.y))),
-                              _mm_mul_ps(z, _mm_set1_ps(v.z)));
+        __m128 dot(const __m128 v[3]) const {
+            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2]));
         }
     };
     const uint32_t i0 = index[0], i1 = index[1], i2 = index[2], i3 = index[3];
@@ -340,28 +371,27 @@ void PhotonSplat::receive4(const uint32_t* index) {
     const Lanes n = Lanes::of(units_[nc[i0]], units_[nc[i1]], units_[nc[i2]], units_[nc[i3]]);
     const Lanes ng = Lanes::of(units_[gc[i0]], units_[gc[i1]], units_[gc[i2]], units_[gc[i3]]);
     const Vec3 w = ray_.dir;
-    const Lanes oy{_mm_sub_ps(y.x, _mm_set1_ps(ray_.origin.x)), _mm_sub_ps(y.y, _mm_set1_ps(ray_.origin.y)),
-                   _mm_sub_ps(y.z, _mm_set1_ps(ray_.origin.z))};
+    const Lanes oy{_mm_sub_ps(y.x, wide_.origin[0]), _mm_sub_ps(y.y, wide_.origin[1]), _mm_sub_ps(y.z, wide_.origin[2])};
     const __m128 zero = _mm_setzero_ps();
     // Inside the kernel, facing the photon (negated rejections: a NaN is rejected).
-    const __m128 t = oy.dot(w);
-    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, _mm_set1_ps(end_)));
+    const __m128 t = oy.dot(wide_.dir);
+    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, wide_.end));
     const __m128 d2 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(oy.x, oy.x), _mm_mul_ps(oy.y, oy.y)), _mm_mul_ps(oy.z, oy.z)),
                                  _mm_mul_ps(t, t));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, _mm_set1_ps(h2_)));
-    const __m128 cosTheta = n.dot(w);
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, wide_.h2));
+    const __m128 cosTheta = n.dot(wide_.dir);
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(cosTheta, zero));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(w), zero));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(wide_.dir), zero));
     uint32_t live = uint32_t(_mm_movemask_ps(ok));
     if (!live) return;
     // Rule 1: in front of the origin's tangent plane.
-    const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(receivers_.originNormal()), zero))) : 15u;
+    const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(wide_.originNormal), zero))) : 15u;
     if (const uint32_t behind = live & ~front) stats_.refused[SegmentReceivers::kBehindOrigin] += uint64_t(__builtin_popcount(behind));
     live &= front;
     if (!live) return;
     // Equation (2)'s weight: biweightKernel(max(d2, 0), h2) · −cos θ (· V = 1).
-    const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), _mm_set1_ps(h2_)));
-    const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(kernelScale_), x), x));
+    const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), wide_.h2));
+    const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(wide_.kernelScale, x), x));
     const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
     const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), _mm_set1_ps(1.f));
     // w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once); a glossy
@@ -385,9 +415,8 @@ void PhotonSplat::receive4(const uint32_t* index) {
         }
         fl = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
     }
-    const Lanes c{_mm_mul_ps(_mm_mul_ps(fl.x, _mm_set1_ps(ray_.flux.x)), scale),
-                  _mm_mul_ps(_mm_mul_ps(fl.y, _mm_set1_ps(ray_.flux.y)), scale),
-                  _mm_mul_ps(_mm_mul_ps(fl.z, _mm_set1_ps(ray_.flux.z)), scale)};
+    const Lanes c{_mm_mul_ps(_mm_mul_ps(fl.x, wide_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(fl.y, wide_.flux[1]), scale),
+                  _mm_mul_ps(_mm_mul_ps(fl.z, wide_.flux[2]), scale)};
     // Non-negative and finite.
     const __m128 inf = _mm_set1_ps(INFINITY);
     __m128 good = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(c.x, zero), _mm_cmplt_ps(c.x, inf)),

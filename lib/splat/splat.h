@@ -92,22 +92,19 @@ public:
     // (the same operations in the same order, lane by lane).
     uint32_t surelyVisible4(__m128 x, __m128 y, __m128 z) const {
         if (blockerCount_ < 0) return 0;
-        const __m128 rx = _mm_sub_ps(x, _mm_set1_ps(origin_.x)), ry = _mm_sub_ps(y, _mm_set1_ps(origin_.y)),
-                     rz = _mm_sub_ps(z, _mm_set1_ps(origin_.z));
-        auto dot = [](const Vec3& v, __m128 a, __m128 b, __m128 c) {
-            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(v.x), a), _mm_mul_ps(_mm_set1_ps(v.y), b)),
-                              _mm_mul_ps(_mm_set1_ps(v.z), c));
+        const __m128 rx = _mm_sub_ps(x, wide_.origin[0]), ry = _mm_sub_ps(y, wide_.origin[1]), rz = _mm_sub_ps(z, wide_.origin[2]);
+        auto dot = [](const __m128 v[3], __m128 a, __m128 b, __m128 c) {
+            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(v[0], a), _mm_mul_ps(v[1], b)), _mm_mul_ps(v[2], c));
         };
         __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
         for (int k = 0; k < blockerCount_; ++k) {
-            const Blocker& b = blockers_[k];
-            const __m128 side = _mm_sub_ps(dot(b.n, x, y, z), _mm_set1_ps(b.d));
-            __m128 clear = _mm_cmpgt_ps(side, _mm_set1_ps(b.margin));
+            const WideBlocker& b = wide_.blockers[k];
+            const __m128 side = _mm_sub_ps(dot(b.n, x, y, z), b.d);
+            __m128 clear = _mm_cmpgt_ps(side, b.margin);
             if (_mm_movemask_ps(_mm_andnot_ps(clear, all)) != 0) {  // some live lane is behind the plane
-                const __m128 height = _mm_set1_ps(b.height);
-                const __m128 reach = _mm_mul_ps(_mm_set1_ps(b.margin), _mm_sub_ps(height, side));
+                const __m128 reach = _mm_mul_ps(b.margin, _mm_sub_ps(b.height, side));
                 for (int e = 0; e < 3; ++e)
-                    clear = _mm_or_ps(clear, _mm_cmpgt_ps(_mm_mul_ps(dot(b.edge[e], rx, ry, rz), height), reach));
+                    clear = _mm_or_ps(clear, _mm_cmpgt_ps(_mm_mul_ps(dot(b.edge[e], rx, ry, rz), b.height), reach));
                 all = _mm_and_ps(all, clear);
                 if (_mm_movemask_ps(all) == 0) return 0;
             }
@@ -129,12 +126,25 @@ private:
         Vec3 edge[3];  // unit normals of the planes through x(i−1) and an edge, out of the cone
     };
     void findBlockers(const PhotonRay& ray);
+#if defined(__SSE2__)
+    struct WideBlocker {  // a Blocker's numbers, each in all four lanes
+        __m128 n[3], d, margin, height, edge[3][3];
+    };
+    struct Wide {
+        __m128 origin[3];
+        WideBlocker blockers[kMaxPlanes];
+    };
+    void widenBlockers();
+#endif
 
     const RayAccel& accel_;
     Vec3 origin_, originNormal_;
     bool hasOriginNormal_;
     int blockerCount_ = -1;  // -1: the triangles cannot decide
     Blocker blockers_[kMaxPlanes];
+#if defined(__SSE2__)
+    Wide wide_;  // for surelyVisible4, made with the blockers
+#endif
 };
 
 // Biweight kernel over the disc of radius h: ∫ K dA = 1.
