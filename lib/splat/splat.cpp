@@ -434,9 +434,19 @@ void PhotonSplat::receive4(const uint32_t* index) {
     alignas(16) float cx[4], cy[4], cz[4], lx[4], ly[4], lz[4];
     _mm_store_ps(cx, c.x), _mm_store_ps(cy, c.y), _mm_store_ps(cz, c.z);
     _mm_store_ps(lx, lifted.x), _mm_store_ps(ly, lifted.y), _mm_store_ps(lz, lifted.z);
+    // Counted once here: a count kept in stats_ would be reloaded after every film write (the
+    // film's int64_t may alias its uint64_t).
+    const uint32_t sure = live & visible;
+    static const uint8_t kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+    stats_.visibleByPlanes += kCount[sure], stats_.contributions += kCount[sure];
+    const uint32_t* pixel = samples_.pixel.data();
     for (uint32_t bits = live; bits; bits &= bits - 1) {
         const int k = __builtin_ctz(bits);
-        deposit(index[k], Vec3(cx[k], cy[k], cz[k]), (visible >> k) & 1u, Vec3(lx[k], ly[k], lz[k]));
+        int64_t* px = &layer_[size_t(pixel[index[k]]) * 3];
+        if (sure >> k & 1u)
+            PendingContributions::addFixed(px, Vec3(cx[k], cy[k], cz[k]));
+        else
+            pending_.add(Vec3(lx[k], ly[k], lz[k]), px, Vec3(cx[k], cy[k], cz[k]));
     }
 }
 #endif
