@@ -353,12 +353,22 @@ TEST(OcclusionTreeBuild, LeavesMatchGridAndSamplesAreContiguousPerBrick) {
                 EXPECT_EQ(lo % kBrickSize, IVec3(0));
                 EXPECT_TRUE(glm::all(glm::equal(hi, glm::min(lo + IVec3(kBrickSize), dims))));
                 const Brick& b = tree.bricks[n.brick()];
+                // Every sample lies in the brick's sample box, by at least the pad, and the box
+                // is tight: within a hundredth of a voxel of the samples' own bounds.
+                Vec3 boxLo, boxHi, seenLo(INFINITY), seenHi(-INFINITY);
+                b.sampleBounds(Vec3(lo), boxLo, boxHi);
                 for (uint32_t s = b.firstSample; s < b.firstSample + b.sampleCount; ++s) {
                     ASSERT_LT(s, tree.sampleCount);
                     ++sampleSeen[s];
-                    IVec3 v(glm::floor(grid.geometry.voxelFromWorld(samples.position[s])));
+                    const Vec3 p = grid.geometry.voxelFromWorld(samples.position[s]);
+                    IVec3 v(glm::floor(p));
                     EXPECT_TRUE(glm::all(glm::greaterThanEqual(v, lo)) && glm::all(glm::lessThan(v, hi)));
+                    EXPECT_TRUE(glm::all(glm::greaterThanEqual(p, boxLo + 5e-4f)) && glm::all(glm::lessThanEqual(p, boxHi - 5e-4f)))
+                        << "sample " << s << " outside its brick's sample box";
+                    seenLo = glm::min(seenLo, p), seenHi = glm::max(seenHi, p);
                 }
+                if (b.sampleCount > 0)
+                    EXPECT_TRUE(glm::all(glm::lessThan(seenLo - boxLo, Vec3(0.01f))) && glm::all(glm::lessThan(boxHi - seenHi, Vec3(0.01f))));
                 uint32_t rank = 0;
                 for (int z = lo.z; z < hi.z; ++z)
                     for (int y = lo.y; y < hi.y; ++y)

@@ -94,11 +94,26 @@ private:
 };
 
 // Top-down over boxes of bricks (box coordinates in bricks; nodes and bricks in voxels).
+}  // namespace
+
+void Brick::setSampleBox(const Vec3& lo, const Vec3& hi) {
+    auto quantize = [](float x, float pad) {
+        return uint16_t(std::clamp(std::floor((x + kBoxOffset) * kBoxScale + pad), 0.f, 65535.f));
+    };
+    for (int a = 0; a < 3; ++a) {
+        sampleBox[a] = quantize(lo[a], -kBoxPad);
+        sampleBox[3 + a] = uint16_t(std::min(65535, quantize(hi[a], kBoxPad) + 1));
+    }
+}
+
+namespace {
+
 class Builder {
 public:
     Builder(const OcclusionGrid& grid, const SummedAreaTable& sat, const std::vector<uint64_t>& sampleKeys,
-            const std::vector<uint8_t>& octant, std::vector<uint32_t>& order, OcclusionTree& tree)
-        : grid_(grid), sat_(sat), keys_(sampleKeys), octant_(octant), order_(order), tree_(tree),
+            const std::vector<uint8_t>& octant, const std::vector<Vec3>& positions, std::vector<uint32_t>& order,
+            OcclusionTree& tree)
+        : grid_(grid), sat_(sat), keys_(sampleKeys), octant_(octant), positions_(positions), order_(order), tree_(tree),
           brickDims_((grid.geometry.dims + IVec3(kBrickSize - 1)) / kBrickSize) {}
 
     void build(const Box& box, int depth) {
@@ -221,10 +236,14 @@ private:
             for (int k = 1; k < 8; ++k) brick.octantStart[k - 1] = uint16_t(start[k]);
         order_.resize(order_.size() + brick.sampleCount);
         uint32_t* out = order_.data() + brick.firstSample;  // (no element when the brick has no samples)
+        Vec3 boxLo(INFINITY), boxHi(-INFINITY);
         for (auto it = from; it != to; ++it) {
             const uint32_t i = uint32_t(*it & 0xffffffffu);
             out[brick.divided() ? start[octant_[i]]++ : uint32_t(it - from)] = i;
+            const Vec3 p = g.voxelFromWorld(positions_[i]) - Vec3(lo);
+            boxLo = glm::min(boxLo, p), boxHi = glm::max(boxHi, p);
         }
+        if (from != to) brick.setSampleBox(boxLo, boxHi);
         RS_CHECK(tree_.bricks.size() < (size_t(1) << 32));
         push(Node::brickLeaf(uint32_t(tree_.bricks.size())));
         tree_.bricks.push_back(brick);
@@ -234,6 +253,7 @@ private:
     const SummedAreaTable& sat_;
     const std::vector<uint64_t>& keys_;
     const std::vector<uint8_t>& octant_;
+    const std::vector<Vec3>& positions_;
     std::vector<uint32_t>& order_;
     OcclusionTree& tree_;
     IVec3 brickDims_;
@@ -351,7 +371,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     tree.geometry = g;
     std::vector<uint32_t> order;
     order.reserve(n);
-    Builder builder(grid, sat, keys, octant, order, tree);
+    Builder builder(grid, sat, keys, octant, samples.position, order, tree);
     builder.build({IVec3(0), brickDims}, 0);
     RS_CHECK(order.size() == keys.size());
     tree.sampleCount = uint32_t(order.size());

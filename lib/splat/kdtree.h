@@ -82,7 +82,20 @@ struct Brick {
     uint32_t firstSample = 0;
     uint32_t sampleCount = 0;
     uint16_t octantStart[7] = {};
+    // The box its samples' voxel-space positions lie in (lo x, y, z, hi x, y, z), from the
+    // brick's min corner in steps of 1/kBoxScale voxel from −kBoxOffset, widened by kBoxPad
+    // steps: the traversal skips what it cannot reach without reading the samples.
+    uint16_t sampleBox[6] = {};
     uint16_t pad = 0;  // no indeterminate bytes: trees compare with memcmp
+
+    static constexpr float kBoxScale = 8192.f, kBoxOffset = 0.25f, kBoxPad = 8.f;  // pad: 1e-3 voxel
+    void setSampleBox(const Vec3& lo, const Vec3& hi);  // relative to the brick's min corner
+    void sampleBounds(const Vec3& corner, Vec3& lo, Vec3& hi) const {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = corner[a] + (float(sampleBox[a]) / kBoxScale - kBoxOffset);
+            hi[a] = corner[a] + (float(sampleBox[3 + a]) / kBoxScale - kBoxOffset);
+        }
+    }
 
     static constexpr uint32_t kMaxDivided = 65535;
     bool divided() const { return sampleCount <= kMaxDivided; }

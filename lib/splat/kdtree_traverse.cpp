@@ -240,10 +240,16 @@ inline bool CylinderTraversal::shadowable(int i0, int j0) const {
     return touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1);
 }
 
-// A met brick's samples, by octant (those out of the cylinder's reach are skipped); what the
-// splat reads of a reached sample is asked for first.
+// A met brick's samples, by octant: the box its samples lie in, and each octant's part of
+// it, are tested first (boxMayBeReached), so that what the cylinder cannot reach is not read;
+// what the splat reads of a reached sample is asked for first.
 void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     const Brick& brick = tree_.bricks[met.brick];
+    const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
+    Vec3 lo, hi;
+    brick.sampleBounds(corner, lo, hi);
+    s_.unshadowed.clear();
+    if (!boxMayBeReached(lo, hi)) return;
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
     s_.unshadowed.resize(brick.sampleCount);
@@ -252,10 +258,29 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount);
         return;
     }
+    constexpr float kEdge = 1e-3f;  // the octants' faces, widened past the positions' rounding
     for (int k = 0; k < 8; ++k) {
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
-        if (first != last && octantMayBeReached(met.entry, k)) gatherSampleRange(met.entry, first, last);
+        if (first == last) continue;
+        const Vec3 octant = corner + Vec3(float(2 * (k & 1)), float(k & 2), float(k >> 1 & 2));
+        const Vec3 partLo = glm::max(lo, octant - kEdge), partHi = glm::min(hi, octant + (2.f + kEdge));
+        if (boxMayBeReached(partLo, partHi)) gatherSampleRange(met.entry, first, last);
     }
+}
+
+// Whether the box [lo, hi] (voxel space) can hold a reached sample: it reaches into the depth
+// range (0, L], within h of the axis, in front of the origin's tangent plane. Each test is
+// widened by kSlack, above the rounding of the per-sample tests, which decide.
+bool CylinderTraversal::boxMayBeReached(const Vec3& lo, const Vec3& hi) const {
+    constexpr float kSlack = 0.01f;  // voxels
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
+    const Vec3 c = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
+    const Vec3 d = c - o_;
+    const float along = glm::dot(d, w_), spread = glm::dot(glm::abs(w_), half) + kSlack;
+    if (along + spread <= 0.f || along - spread > L_) return false;
+    if (hasNormal_ && glm::dot(d, n_) + glm::dot(glm::abs(n_), half) + kSlack <= 0.f) return false;
+    const float reach = radius_ + glm::length(half) + kSlack;
+    return glm::dot(d, d) - along * along < reach * reach;
 }
 
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
@@ -297,6 +322,7 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
         if (reach(eye_.position[i], r)) add(i, r);
     }
     st_.samplesReached += n + free - before;
+    st_.samplesTested += last - first;
     s_.samples.resize(n);
     s_.unshadowed.resize(free);
 }
@@ -433,20 +459,6 @@ bool CylinderTraversal::voxelMet(int x, int y, int z) const {
     const Vec3 lo{float(x), float(y), float(z)};
     clipToBox(o_, w_, r_, lo, lo + 1.f, t0, t1);
     return t0 <= t1;
-}
-
-// Whether octant k of a brick (2×2×2 voxels, its bounding sphere) can hold a reached sample:
-// it reaches into the depth range (0, L], within h of the axis, in front of the origin's
-// tangent plane. It only skips per-sample tests, which decide.
-bool CylinderTraversal::octantMayBeReached(const StackEntry& e, int k) const {
-    constexpr float kOctantRadius = 1.7330508f;  // √3 and a little
-    const Vec3 c(float(e.lo[0] + 2 * (k & 1) + 1), float(e.lo[1] + (k & 2) + 1), float(e.lo[2] + (k >> 1 & 2) + 1));
-    const Vec3 d = c - o_;
-    const float along = glm::dot(d, w_);
-    if (along + kOctantRadius <= 0.f || along - kOctantRadius > L_) return false;
-    if (hasNormal_ && glm::dot(d, n_) + kOctantRadius <= 0.f) return false;
-    const float reach = radius_ + kOctantRadius;
-    return glm::dot(d, d) - along * along < reach * reach;
 }
 
 // Early exit: every valid cell the node's points project to (and their bilinear neighbours)

@@ -90,10 +90,12 @@ struct Cylinder {
 
 struct TraversalStats {
     uint64_t cylinders = 0, nodes = 0, pruned = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
+    uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
     uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
     void add(const TraversalStats& o) {
         cylinders += o.cylinders, nodes += o.nodes, pruned += o.pruned, occluders += o.occluders;
         samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
+        samplesTested += o.samplesTested;
     }
 };
 
@@ -238,7 +240,7 @@ private:
     void gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last);
     bool reach(const Vec3& world, Reach& r) const;
     uint32_t reach4(const Vec3* world, Reach4& r) const;
-    bool octantMayBeReached(const StackEntry& e, int k) const;
+    bool boxMayBeReached(const Vec3& lo, const Vec3& hi) const;
     bool shadowable(int i0, int j0) const;
 
     // Sweep.
