@@ -220,6 +220,7 @@ private:
     void gatherBrick(const StackEntry& e, uint32_t index);
     void gatherOcclusionBlock(const StackEntry& e, Node node);
     void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
+    bool allBehindTangent(const StackEntry& e, uint64_t bits) const;
     void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;
     void metRange(const StackEntry& e, int i0[3], int i1[3]) const;
     bool surelyMet(const Vec3& p) const;
