@@ -274,8 +274,21 @@ public:
 #endif
     }
 
-    // One sample, whose visibility by the mask is `visibility`.
+    // One sample, whose visibility by the mask is `visibility` (with batches: gathered four at
+    // a time for receive4).
     void receive(uint32_t i, float visibility) {
+#if defined(__SSE2__)
+        if (visibility_ && batches_) {
+            waiting_[waitingCount_] = i, waitingV_[waitingCount_] = visibility;
+            if (++waitingCount_ == 4) receive4(waiting_, waitingV_, 4), waitingCount_ = 0;
+            return;
+        }
+#endif
+        receiveOne(i, visibility);
+    }
+
+    // receive() for one sample at once.
+    void receiveOne(uint32_t i, float visibility) {
         // Only samples in front of the ray's origin, inside the kernel, facing the photon.
         const Vec3 w = ray_.dir;
         const Vec3 y = samples_.position[i];
@@ -309,15 +322,21 @@ public:
     // Samples the mask leaves wholly visible (V = 1): the same as receive(i, 1) for each, four
     // at a time where SSE is there.
     void receiveUnshadowed(const uint32_t* index, size_t count) {
-        size_t k = 0;
 #if defined(__SSE2__)
-        if (visibility_ && batches_)
-            for (; k + 4 <= count; k += 4) receive4(index + k);
+        if (visibility_ && batches_) {
+            for (size_t k = 0; k < count; k += 4) receive4(index + k, nullptr, int(std::min<size_t>(4, count - k)));
+            return;
+        }
 #endif
-        for (; k < count; ++k) receive(index[k], 1.f);
+        for (size_t k = 0; k < count; ++k) receiveOne(index[k], 1.f);
     }
 
-    void finish() { pending_.flush(); }
+    void finish() {
+#if defined(__SSE2__)
+        if (waitingCount_ > 0) receive4(waiting_, waitingV_, waitingCount_), waitingCount_ = 0;
+#endif
+        pending_.flush();
+    }
 
 private:
     // Into the film now when rule 2 is already decided (visible), else when Embree has said.
@@ -332,7 +351,10 @@ private:
         ++stats_.contributions;
     }
 #if defined(__SSE2__)
-    void receive4(const uint32_t* index);
+    void receive4(const uint32_t* index, const float* visibility, int count);
+    uint32_t waiting_[4];  // samples of the sweep waiting for a batch of four
+    float waitingV_[4];
+    int waitingCount_ = 0;
 #endif
 
     const EyeSamples& samples_;
@@ -352,9 +374,10 @@ private:
 };
 
 #if defined(__SSE2__)
-// receive(i, 1) for four samples (with visibility): every step the same operations in the same
-// order, one lane a sample, so the same sums; the BSDF is read lane by lane.
-void PhotonSplat::receive4(const uint32_t* index) {
+// receiveOne(index[k], visibility[k] or 1) for up to four samples (with visibility): every step
+// the same operations in the same order, one lane a sample, so the same sums; the BSDF is read
+// lane by lane. Lanes past `count` repeat the first sample and are dropped.
+void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int count) {
     struct Lanes {
         __m128 x, y, z;
         static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
@@ -364,7 +387,8 @@ void PhotonSplat::receive4(const uint32_t* index) {
             return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2]));
         }
     };
-    const uint32_t i0 = index[0], i1 = index[1], i2 = index[2], i3 = index[3];
+    const uint32_t i0 = index[0], i1 = count > 1 ? index[1] : i0, i2 = count > 2 ? index[2] : i0, i3 = count > 3 ? index[3] : i0;
+    const uint32_t lanes = (1u << count) - 1u;
     const Vec3* pos = samples_.position.data();
     const Lanes y = Lanes::of(pos[i0], pos[i1], pos[i2], pos[i3]);
     const uint16_t* nc = samples_.normal.data();
@@ -383,7 +407,7 @@ void PhotonSplat::receive4(const uint32_t* index) {
     const __m128 cosTheta = n.dot(wide_.dir);
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(cosTheta, zero));
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(wide_.dir), zero));
-    uint32_t live = uint32_t(_mm_movemask_ps(ok));
+    uint32_t live = uint32_t(_mm_movemask_ps(ok)) & lanes;
     if (!live) return;
     // Rule 1: in front of the origin's tangent plane.
     const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(wide_.originNormal), zero))) : 15u;
@@ -394,7 +418,10 @@ void PhotonSplat::receive4(const uint32_t* index) {
     const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), wide_.h2));
     const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(wide_.kernelScale, x), x));
     const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
-    const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), _mm_set1_ps(1.f));
+    const __m128 v = visibility ? _mm_setr_ps(visibility[0], count > 1 ? visibility[1] : 1.f, count > 2 ? visibility[2] : 1.f,
+                                              count > 3 ? visibility[3] : 1.f)
+                                : _mm_set1_ps(1.f);
+    const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
     // w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once); a glossy
     // one's lobe is evaluated lane by lane.
     const uint32_t* bsdf = samples_.bsdf.data();
