@@ -36,6 +36,16 @@ ScrambledHalton::ScrambledHalton(uint64_t seed, int dimensions) : seed_(seed) {
                 std::swap(perms_[start + i], perms_[start + (h % uint64_t(i + 1))]);
             }
         }
+        // Once the index's digits run out, digits m… are all zero: their permuted values add a
+        // constant, zeros[m] = Σ_{k ≥ m} perm_k(0)·b^(nd−1−k), after m digits shifted by b^(nd−m).
+        offsetM_.push_back(zeros_.size());
+        std::vector<uint64_t> zeros(size_t(nd) + 1, 0), powers(size_t(nd) + 1, 1);
+        for (int m = nd - 1; m >= 0; --m) {
+            powers[size_t(m)] = powers[size_t(m) + 1] * uint64_t(b);
+            zeros[size_t(m)] = zeros[size_t(m) + 1] + uint64_t(perms_[offset_.back() + size_t(m) * size_t(b)]) * powers[size_t(m) + 1];
+        }
+        zeros_.insert(zeros_.end(), zeros.begin(), zeros.end());
+        powers_.insert(powers_.end(), powers.begin(), powers.end());
     }
 }
 
@@ -44,35 +54,40 @@ namespace {
 // The scrambled radical inverse's digits: `digits` permuted digits of index in base b, most
 // significant last. Base is a std::integral_constant for the small primes, so that the
 // compiler divides by multiplying, or a plain uint64_t.
+// Digits past the index's own are zeros, whose permuted values are a constant per count:
+// (the same integer as reversing all `digits`).
 template <class Base>
-uint64_t reverseDigits(Base base, uint64_t index, int digits, const uint16_t* perm) {
+uint64_t reverseDigits(Base base, uint64_t index, int digits, const uint16_t* perm, const uint64_t* zeros,
+                       const uint64_t* powers) {
     const uint64_t b = base;
     uint64_t reversed = 0;
-    for (int k = 0; k < digits; ++k) {
+    int k = 0;
+    for (; k < digits && index != 0; ++k) {
         const uint64_t next = index / b;
         reversed = reversed * b + perm[size_t(k) * b + (index - next * b)];
         index = next;
     }
-    return reversed;
+    return reversed * powers[k] + zeros[k];
 }
 
 template <uint64_t B>
 using Prime = std::integral_constant<uint64_t, B>;
 
-uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm) {
+uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm, const uint64_t* zeros,
+                       const uint64_t* powers) {
     switch (b) {
-        case 2: return reverseDigits(Prime<2>(), index, digits, perm);
-        case 3: return reverseDigits(Prime<3>(), index, digits, perm);
-        case 5: return reverseDigits(Prime<5>(), index, digits, perm);
-        case 7: return reverseDigits(Prime<7>(), index, digits, perm);
-        case 11: return reverseDigits(Prime<11>(), index, digits, perm);
-        case 13: return reverseDigits(Prime<13>(), index, digits, perm);
-        case 17: return reverseDigits(Prime<17>(), index, digits, perm);
-        case 19: return reverseDigits(Prime<19>(), index, digits, perm);
-        case 23: return reverseDigits(Prime<23>(), index, digits, perm);
-        case 29: return reverseDigits(Prime<29>(), index, digits, perm);
-        case 31: return reverseDigits(Prime<31>(), index, digits, perm);
-        default: return reverseDigits<uint64_t>(b, index, digits, perm);
+        case 2: return reverseDigits(Prime<2>(), index, digits, perm, zeros, powers);
+        case 3: return reverseDigits(Prime<3>(), index, digits, perm, zeros, powers);
+        case 5: return reverseDigits(Prime<5>(), index, digits, perm, zeros, powers);
+        case 7: return reverseDigits(Prime<7>(), index, digits, perm, zeros, powers);
+        case 11: return reverseDigits(Prime<11>(), index, digits, perm, zeros, powers);
+        case 13: return reverseDigits(Prime<13>(), index, digits, perm, zeros, powers);
+        case 17: return reverseDigits(Prime<17>(), index, digits, perm, zeros, powers);
+        case 19: return reverseDigits(Prime<19>(), index, digits, perm, zeros, powers);
+        case 23: return reverseDigits(Prime<23>(), index, digits, perm, zeros, powers);
+        case 29: return reverseDigits(Prime<29>(), index, digits, perm, zeros, powers);
+        case 31: return reverseDigits(Prime<31>(), index, digits, perm, zeros, powers);
+        default: return reverseDigits<uint64_t>(b, index, digits, perm, zeros, powers);
     }
 }
 
@@ -80,7 +95,8 @@ uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* p
 
 float ScrambledHalton::sample(uint64_t index, int dim) const {
     if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
-    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]]);
+    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]],
+                                            &zeros_[offsetM_[dim]], &powers_[offsetM_[dim]]);
     return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
 }
 

@@ -22,6 +22,11 @@ private:
     std::vector<double> scales_;      // bases_[d]^−digits_[d]
     std::vector<size_t> offset_;      // into perms_, per dimension
     std::vector<uint16_t> perms_;     // digits_[d] permutations of bases_[d] digits each
+    // Per dimension, per number of digits m (0…digits): what the permuted zero digits m… add
+    // to the reversed digits (zeros_), and the factor that shifts m reversed digits past them
+    // (powers_, bases_[d]^(digits − m)); indexed from offsetM_[d].
+    std::vector<uint64_t> zeros_, powers_;
+    std::vector<size_t> offsetM_;
 };
 
 }  // namespace rs
