@@ -122,26 +122,31 @@ void CylinderTraversal::findValidRows() {
 // depends on the occluders alone, so walking the samples afterwards (visitSamples) leaves the
 // nodes visited and the occluders found as they were.
 void CylinderTraversal::gather() {
-    StackEntry root{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
-    clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), root.t0, root.t1);
+    StackEntry e{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
+    clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), e.t0, e.t1);
     s_.stack.clear();
-    if (root.t0 <= root.t1) s_.stack.push_back(root);
-    while (!s_.stack.empty()) {
-        const StackEntry e = s_.stack.back();
-        s_.stack.pop_back();
+    // The near child is worked on next without going through the stack (a stored entry read
+    // right back waits for the store); only far children are pushed.
+    bool next = e.t0 <= e.t1;
+    while (next || !s_.stack.empty()) {
+        if (!next) {
+            e = s_.stack.back();
+            s_.stack.pop_back();
+        }
+        next = false;
         ++st_.nodes;
         if (fullCount_ > 0 && prunable(e)) {
             ++st_.pruned;
             continue;
         }
         const Node node = tree_.nodes[e.node];
-        if (!s_.stack.empty()) prefetchNode(s_.stack.back().node);
-        switch (node.type()) {
-            case NodeType::Empty: break;
-            case NodeType::Split: descend(e, node); break;
-            case NodeType::Brick: gatherBrick(e, node.brick()); break;
-            case NodeType::Occlusion: gatherOcclusionBlock(e, node); break;
+        if (node.type() == NodeType::Split) {
+            next = descend(e, node);
+            continue;
         }
+        if (!s_.stack.empty()) prefetchNode(s_.stack.back().node);
+        if (node.type() == NodeType::Brick) gatherBrick(e, node.brick());
+        else if (node.type() == NodeType::Occlusion) gatherOcclusionBlock(e, node);
     }
 }
 
@@ -151,8 +156,9 @@ void CylinderTraversal::prefetchNode(uint32_t index) const {
     if (node.type() == NodeType::Brick) __builtin_prefetch(&tree_.bricks[node.brick()]);
 }
 
-// Shrink the cylinder bounds to each child; the near child goes on top of the stack.
-void CylinderTraversal::descend(const StackEntry& e, Node node) {
+// Shrink the cylinder bounds to each child: the far child goes on the stack, the near one
+// replaces e (false when the cylinder misses it).
+bool CylinderTraversal::descend(StackEntry& e, Node node) {
     const int a = node.axis();
     const float plane = float(node.plane());
     StackEntry lower = e, upper = e;
@@ -166,7 +172,9 @@ void CylinderTraversal::descend(const StackEntry& e, Node node) {
     const StackEntry& farChild = w_[a] >= 0.f ? upper : lower;
     __builtin_prefetch(&tree_.nodes[upper.node]);
     if (farChild.t0 <= farChild.t1) s_.stack.push_back(farChild);
-    if (nearChild.t0 <= nearChild.t1) s_.stack.push_back(nearChild);
+    if (!(nearChild.t0 <= nearChild.t1)) return false;
+    e = nearChild;
+    return true;
 }
 
 // Asks for the cache lines of a brick's part of a per-sample array: the tree's samples are

@@ -215,7 +215,7 @@ private:
     int sliceOf(int vN) const { return forward_ ? vN : dimN_ - 1 - vN; }
 
     // Gathering.
-    void descend(const StackEntry& e, Node node);
+    bool descend(StackEntry& e, Node node);
     void prefetchNode(uint32_t index) const;
     void gatherBrick(const StackEntry& e, uint32_t index);
     void gatherOcclusionBlock(const StackEntry& e, Node node);
