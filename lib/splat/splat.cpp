@@ -256,6 +256,17 @@ Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility
     return cyl;
 }
 
+#if defined(__SSE2__)
+// Four samples' vectors, a lane each.
+struct Lanes {
+    __m128 x, y, z;
+    static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+        return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
+    }
+    __m128 dot(const __m128 v[3]) const { return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2])); }
+};
+#endif
+
 // What one photon ray gives each eye sample the traversal hands it: equation (2), after the
 // kernel, orientation and receiver tests, into the thread's fixed-point buffer of its class.
 class PhotonSplat {
@@ -352,6 +363,8 @@ private:
     }
 #if defined(__SSE2__)
     void receive4(const uint32_t* index, const float* visibility, int count);
+    Lanes weightedF4(const uint32_t lane[4], uint32_t live, const Lanes& n, __m128 minusCos) const;
+    void deposit4(const uint32_t lane[4], uint32_t live, const Lanes& y, const Lanes& ng, const Lanes& c);
     uint32_t waiting_[4];  // samples of the sweep waiting for a batch of four
     float waitingV_[4];
     int waitingCount_ = 0;
@@ -378,24 +391,14 @@ private:
 // the same operations in the same order, one lane a sample, so the same sums; the BSDF is read
 // lane by lane. Lanes past `count` repeat the first sample and are dropped.
 void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int count) {
-    struct Lanes {
-        __m128 x, y, z;
-        static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-            return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
-        }
-        __m128 dot(const __m128 v[3]) const {
-            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2]));
-        }
-    };
-    const uint32_t i0 = index[0], i1 = count > 1 ? index[1] : i0, i2 = count > 2 ? index[2] : i0, i3 = count > 3 ? index[3] : i0;
-    const uint32_t lanes = (1u << count) - 1u;
+    const uint32_t lane[4] = {index[0], count > 1 ? index[1] : index[0], count > 2 ? index[2] : index[0],
+                              count > 3 ? index[3] : index[0]};
     const Vec3* pos = samples_.position.data();
-    const Lanes y = Lanes::of(pos[i0], pos[i1], pos[i2], pos[i3]);
+    const Lanes y = Lanes::of(pos[lane[0]], pos[lane[1]], pos[lane[2]], pos[lane[3]]);
     const uint16_t* nc = samples_.normal.data();
     const uint16_t* gc = samples_.geomNormal.data();
-    const Lanes n = Lanes::of(units_[nc[i0]], units_[nc[i1]], units_[nc[i2]], units_[nc[i3]]);
-    const Lanes ng = Lanes::of(units_[gc[i0]], units_[gc[i1]], units_[gc[i2]], units_[gc[i3]]);
-    const Vec3 w = ray_.dir;
+    const Lanes n = Lanes::of(units_[nc[lane[0]]], units_[nc[lane[1]]], units_[nc[lane[2]]], units_[nc[lane[3]]]);
+    const Lanes ng = Lanes::of(units_[gc[lane[0]]], units_[gc[lane[1]]], units_[gc[lane[2]]], units_[gc[lane[3]]]);
     const Lanes oy{_mm_sub_ps(y.x, wide_.origin[0]), _mm_sub_ps(y.y, wide_.origin[1]), _mm_sub_ps(y.z, wide_.origin[2])};
     const __m128 zero = _mm_setzero_ps();
     // Inside the kernel, facing the photon (negated rejections: a NaN is rejected).
@@ -407,14 +410,14 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
     const __m128 cosTheta = n.dot(wide_.dir);
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(cosTheta, zero));
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(wide_.dir), zero));
-    uint32_t live = uint32_t(_mm_movemask_ps(ok)) & lanes;
+    uint32_t live = uint32_t(_mm_movemask_ps(ok)) & ((1u << count) - 1u);
     if (!live) return;
     // Rule 1: in front of the origin's tangent plane.
     const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(wide_.originNormal), zero))) : 15u;
     if (const uint32_t behind = live & ~front) stats_.refused[SegmentReceivers::kBehindOrigin] += uint64_t(__builtin_popcount(behind));
     live &= front;
     if (!live) return;
-    // Equation (2)'s weight: biweightKernel(max(d2, 0), h2) · −cos θ (· V = 1).
+    // Equation (2): w · f_r · Φ · biweightKernel(max(d2, 0), h2) · −cos θ · V.
     const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), wide_.h2));
     const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(wide_.kernelScale, x), x));
     const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
@@ -422,37 +425,46 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
                                               count > 3 ? visibility[3] : 1.f)
                                 : _mm_set1_ps(1.f);
     const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
-    // w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once); a glossy
-    // one's lobe is evaluated lane by lane.
-    const uint32_t* bsdf = samples_.bsdf.data();
-    const __m128i word = _mm_setr_epi32(int(bsdf[i0]), int(bsdf[i1]), int(bsdf[i2]), int(bsdf[i3]));
-    const __m128i nine = _mm_set1_epi32(511);
-    const __m128 unit = _mm_castsi128_ps(_mm_slli_epi32(_mm_add_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(127 - 24)), 23));
-    Lanes fl{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
-             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 9), nine)), unit),
-             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 18), nine)), unit)};
-    const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
-    if (glossy) {
-        alignas(16) float nx[4], nyy[4], nz[4], mc[4], fx[4], fy[4], fz[4];
-        _mm_store_ps(nx, n.x), _mm_store_ps(nyy, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
-        _mm_store_ps(fx, fl.x), _mm_store_ps(fy, fl.y), _mm_store_ps(fz, fl.z);
-        for (uint32_t bits = glossy; bits; bits &= bits - 1) {
-            const int k = __builtin_ctz(bits);
-            const Vec3 g = samples_.glossyF(bsdf[index[k]], Vec3(nx[k], nyy[k], nz[k]), -w, mc[k]);
-            fx[k] = g.x, fy[k] = g.y, fz[k] = g.z;
-        }
-        fl = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
-    }
-    const Lanes c{_mm_mul_ps(_mm_mul_ps(fl.x, wide_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(fl.y, wide_.flux[1]), scale),
-                  _mm_mul_ps(_mm_mul_ps(fl.z, wide_.flux[2]), scale)};
+    const Lanes f = weightedF4(lane, live, n, minusCos);
+    const Lanes c{_mm_mul_ps(_mm_mul_ps(f.x, wide_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(f.y, wide_.flux[1]), scale),
+                  _mm_mul_ps(_mm_mul_ps(f.z, wide_.flux[2]), scale)};
     // Non-negative and finite.
     const __m128 inf = _mm_set1_ps(INFINITY);
     __m128 good = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(c.x, zero), _mm_cmplt_ps(c.x, inf)),
                              _mm_and_ps(_mm_cmpge_ps(c.y, zero), _mm_cmplt_ps(c.y, inf)));
     good = _mm_and_ps(good, _mm_and_ps(_mm_cmpge_ps(c.z, zero), _mm_cmplt_ps(c.z, inf)));
     live &= uint32_t(_mm_movemask_ps(good));
-    if (!live) return;
-    // Rule 2: lifted off the surface (SegmentReceivers::lift), then the planes.
+    if (live) deposit4(lane, live, y, ng, c);
+}
+
+// The samples' w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once);
+// a glossy one's lobe is evaluated lane by lane.
+Lanes PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lanes& n, __m128 minusCos) const {
+    const uint32_t* bsdf = samples_.bsdf.data();
+    const __m128i word = _mm_setr_epi32(int(bsdf[lane[0]]), int(bsdf[lane[1]]), int(bsdf[lane[2]]), int(bsdf[lane[3]]));
+    const __m128i nine = _mm_set1_epi32(511);
+    const __m128 unit = _mm_castsi128_ps(_mm_slli_epi32(_mm_add_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(127 - 24)), 23));
+    Lanes f{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
+            _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 9), nine)), unit),
+            _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 18), nine)), unit)};
+    const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
+    if (glossy) {
+        alignas(16) float nx[4], ny[4], nz[4], mc[4], fx[4], fy[4], fz[4];
+        _mm_store_ps(nx, n.x), _mm_store_ps(ny, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
+        _mm_store_ps(fx, f.x), _mm_store_ps(fy, f.y), _mm_store_ps(fz, f.z);
+        for (uint32_t bits = glossy; bits; bits &= bits - 1) {
+            const int k = __builtin_ctz(bits);
+            const Vec3 g = samples_.glossyF(bsdf[lane[k]], Vec3(nx[k], ny[k], nz[k]), -ray_.dir, mc[k]);
+            fx[k] = g.x, fy[k] = g.y, fz[k] = g.z;
+        }
+        f = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
+    }
+    return f;
+}
+
+// Rule 2 for the live lanes, lifted off their surfaces (SegmentReceivers::lift): into the film
+// when the triangles near the cylinder decide it, else to Embree.
+void PhotonSplat::deposit4(const uint32_t lane[4], uint32_t live, const Lanes& y, const Lanes& ng, const Lanes& c) {
     const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 largest = _mm_max_ps(_mm_and_ps(y.x, absMask), _mm_max_ps(_mm_and_ps(y.y, absMask), _mm_and_ps(y.z, absMask)));
     const __m128 lift = _mm_mul_ps(_mm_set1_ps(1e-4f), _mm_add_ps(_mm_set1_ps(1.f), largest));
@@ -470,7 +482,7 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
     const uint32_t* pixel = samples_.pixel.data();
     for (uint32_t bits = live; bits; bits &= bits - 1) {
         const int k = __builtin_ctz(bits);
-        int64_t* px = &layer_[size_t(pixel[index[k]]) * 3];
+        int64_t* px = &layer_[size_t(pixel[lane[k]]) * 3];
         if (sure >> k & 1u)
             PendingContributions::addFixed(px, Vec3(cx[k], cy[k], cz[k]));
         else
