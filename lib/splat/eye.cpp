@@ -115,18 +115,20 @@ void EyeSamples::append(const EyeSamples& o) {
 }
 
 template <class T>
-static void permuteArray(std::vector<T>& v, const std::vector<uint32_t>& order) {
+static void permuteArray(std::vector<T>& v, const std::vector<uint32_t>& order, ThreadPool& pool) {
     std::vector<T> out(order.size());
-    for (size_t i = 0; i < order.size(); ++i) out[i] = v[order[i]];
+    pool.parallelFor(int64_t(order.size()), 1 << 16, [&](int64_t b, int64_t e, int) {
+        for (int64_t i = b; i < e; ++i) out[size_t(i)] = v[order[size_t(i)]];
+    });
     v.swap(out);
 }
 
-void EyeSamples::permute(const std::vector<uint32_t>& order) {
-    permuteArray(position, order);
-    permuteArray(normal, order);
-    permuteArray(geomNormal, order);
-    permuteArray(pixel, order);
-    permuteArray(bsdf, order);
+void EyeSamples::permute(const std::vector<uint32_t>& order, ThreadPool& pool) {
+    permuteArray(position, order, pool);
+    permuteArray(normal, order, pool);
+    permuteArray(geomNormal, order, pool);
+    permuteArray(pixel, order, pool);
+    permuteArray(bsdf, order, pool);
 }
 
 }  // namespace rs

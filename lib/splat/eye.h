@@ -16,6 +16,8 @@
 
 namespace rs {
 
+class ThreadPool;
+
 // Octahedral encoding of a unit vector in 32 bits (16 bits a coordinate): ~0.005° error;
 // in 16 bits (8 bits a coordinate): ~0.5° error.
 uint32_t encodeUnit(const Vec3& n);
@@ -89,14 +91,13 @@ struct EyeSamples {
     void reserve(size_t n);
     void append(const EyeSamples& other);
     // Reorders the per-sample arrays: new sample i is old sample order[i].
-    void permute(const std::vector<uint32_t>& order);
+    void permute(const std::vector<uint32_t>& order, ThreadPool& pool);
 };
 
 class RayAccel;
 class LightSampler;
 struct Camera;
 struct Scene;
-class ThreadPool;
 class Reporter;
 
 struct EyePassSettings {

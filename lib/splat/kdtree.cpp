@@ -344,8 +344,19 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
             keys[size_t(i)] = ok ? uint64_t(brickIndex(int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
         }
     });
-    std::sort(keys.begin(), keys.end());
-    while (!keys.empty() && keys.back() == ~uint64_t(0)) keys.pop_back();
+    // Sorted by brick, then sample: a counting sort over the bricks, in sample order within one
+    // (the order std::sort would give these unique keys, in linear time).
+    {
+        std::vector<uint32_t> start(size_t(brickDims.x) * brickDims.y * brickDims.z + 1, 0);
+        size_t insideCount = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (inside[i]) ++start[(keys[i] >> 32) + 1], ++insideCount;
+        for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+        std::vector<uint64_t> sorted(insideCount);
+        for (size_t i = 0; i < n; ++i)
+            if (inside[i]) sorted[start[keys[i] >> 32]++] = keys[i];
+        keys.swap(sorted);
+    }
     st.samplesOutside = n - keys.size();
     st.sortSeconds = sortTimer.seconds();
 
@@ -383,7 +394,7 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     st.buildSeconds = buildTimer.seconds();
 
     sortTimer = Timer();
-    samples.permute(order);
+    samples.permute(order, pool);
     st.sortSeconds += sortTimer.seconds();
 
     st.depth = builder.maxDepth();
