@@ -367,8 +367,9 @@ TEST(OcclusionTreeBuild, LeavesMatchGridAndSamplesAreContiguousPerBrick) {
                         << "sample " << s << " outside its brick's sample box";
                     seenLo = glm::min(seenLo, p), seenHi = glm::max(seenHi, p);
                 }
-                if (b.sampleCount > 0)
+                if (b.sampleCount > 0) {
                     EXPECT_TRUE(glm::all(glm::lessThan(seenLo - boxLo, Vec3(0.01f))) && glm::all(glm::lessThan(boxHi - seenHi, Vec3(0.01f))));
+                }
                 uint32_t rank = 0;
                 for (int z = lo.z; z < hi.z; ++z)
                     for (int y = lo.y; y < hi.y; ++y)

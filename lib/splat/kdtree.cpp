@@ -93,7 +93,6 @@ private:
     std::vector<uint32_t> table_;
 };
 
-// Top-down over boxes of bricks (box coordinates in bricks; nodes and bricks in voxels).
 }  // namespace
 
 void Brick::setSampleBox(const Vec3& lo, const Vec3& hi) {
@@ -108,6 +107,7 @@ void Brick::setSampleBox(const Vec3& lo, const Vec3& hi) {
 
 namespace {
 
+// Top-down over boxes of bricks (box coordinates in bricks; nodes and bricks in voxels).
 class Builder {
 public:
     Builder(const OcclusionGrid& grid, const SummedAreaTable& sat, const std::vector<uint64_t>& sampleKeys,

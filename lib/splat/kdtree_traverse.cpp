@@ -202,7 +202,7 @@ static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i
 }
 
 // Whether every voxel of `bits` (a brick's, min corner e.lo) lies behind the origin's tangent
-// plane as addOccluder decides it, (centre − o)·n ≤ ½‖n‖₁: the box of their centres does, with
+// plane as inFrontOfTangent decides it, (centre − o)·n ≤ ½‖n‖₁: the box of their centres does, with
 // a margin above the rounding, so that no voxel the per-voxel test would keep is skipped.
 bool CylinderTraversal::allBehindTangent(const StackEntry& e, uint64_t bits) const {
     const uint64_t yx = bits | bits >> 16 | bits >> 32 | bits >> 48;  // 16 bits: x + 4y
@@ -249,8 +249,7 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         const int bit = __builtin_ctzll(bits);
         const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
         const Vec3 c(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f);
-        if (hasNormal_ && glm::dot(c - o_, n_) <= tangentOffset_) continue;  // addOccluder's own test
-        if (!surelyMet(c) && !voxelMet(x, y, z)) continue;
+        if (!inFrontOfTangent(c) || (!surelyMet(c) && !voxelMet(x, y, z))) continue;
         const uint32_t rank = uint32_t(__builtin_popcountll(brick.occupied & ((uint64_t(1) << bit) - 1)));
         addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
     }
@@ -291,7 +290,6 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     brick.sampleBounds(corner, lo, hi);
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
-    s_.unshadowed.resize(brick.sampleCount);
     s_.unshadowed.clear();
     if (!brick.divided()) {
         gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount);
@@ -422,8 +420,9 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
 
 // A single Occlusion voxel, or a collapsed block: each of its met voxels is an occluder.
 void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
+    auto centre = [](int x, int y, int z) { return Vec3(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f); };
     if (e.hi[0] - e.lo[0] == 1 && e.hi[1] - e.lo[1] == 1 && e.hi[2] - e.lo[2] == 1) {
-        addOccluder(e.lo[0], e.lo[1], e.lo[2], node.voxel());
+        if (inFrontOfTangent(centre(e.lo[0], e.lo[1], e.lo[2]))) addOccluder(e.lo[0], e.lo[1], e.lo[2], node.voxel());
         return;
     }
     int i0[3], i1[3];
@@ -431,15 +430,15 @@ void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
     for (int z = i0[2]; z < i1[2]; ++z)
         for (int y = i0[1]; y < i1[1]; ++y)
             for (int x = i0[0]; x < i1[0]; ++x)
-                if (voxelMet(x, y, z)) addOccluder(x, y, z, node.voxel());
+                if (inFrontOfTangent(centre(x, y, z)) && voxelMet(x, y, z)) addOccluder(x, y, z, node.voxel());
 }
 
-// An occupied, met voxel strictly in front of the origin's tangent plane adds its occlusion
-// along ω to the cell of its centre's projection, in its (ambiguity-offset) slice; the fill
-// bookkeeping records when each cell becomes full, for the early exit.
+// An occupied, met voxel strictly in front of the origin's tangent plane (the callers test
+// both, the cheaper plane first) adds its occlusion along ω to the cell of its centre's
+// projection, in its (ambiguity-offset) slice; the fill bookkeeping records when each cell
+// becomes full, for the early exit.
 void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel) {
     const Vec3 c(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f);
-    if (hasNormal_ && glm::dot(c - o_, n_) <= tangentOffset_) return;
     float occ = 0.f;
     for (int a = 0; a < 3; ++a) occ += occWeight_[a] * float(voxel.count(side_[a]));
     occ = std::min(1.f, occ);

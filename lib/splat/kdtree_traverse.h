@@ -219,6 +219,9 @@ private:
     void prefetchNode(uint32_t index) const;
     void gatherBrick(const StackEntry& e, uint32_t index);
     void gatherOcclusionBlock(const StackEntry& e, Node node);
+    // An occluder's voxel centre must lie strictly in front of the origin's tangent plane
+    // (§5.2), past half the normal's L1 norm: the whole voxel box does.
+    bool inFrontOfTangent(const Vec3& centre) const { return !hasNormal_ || glm::dot(centre - o_, n_) > tangentOffset_; }
     void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
     bool allBehindTangent(const StackEntry& e, uint64_t bits) const;
     void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;
