@@ -532,6 +532,7 @@ bool CylinderTraversal::prunable(const StackEntry& e) const {
 void CylinderTraversal::prepareSweep() {
     s_.samplesSorted.clear();
     s_.occludersSorted.clear();
+    st_.samplesSwept += s_.samples.size();
     if (s_.samples.empty()) {
         sliceMin_ = 0, sliceMax_ = -1;
         return;

@@ -91,11 +91,12 @@ struct Cylinder {
 struct TraversalStats {
     uint64_t cylinders = 0, nodes = 0, pruned = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
     uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
+    uint64_t samplesSwept = 0;   // reached samples an occluder may shadow: read in the slice sweep
     uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
     void add(const TraversalStats& o) {
         cylinders += o.cylinders, nodes += o.nodes, pruned += o.pruned, occluders += o.occluders;
         samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
-        samplesTested += o.samplesTested;
+        samplesTested += o.samplesTested, samplesSwept += o.samplesSwept;
     }
 };
 
