@@ -210,7 +210,7 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
 int cmdInfo(int argc, char** argv) {
     bool gpu = false;
     Command cmd("raysplat info SCENE", "Loads SCENE and prints what the renderer sees in it.");
-    cmd.add({"--gpu", "", "also report the EGL device the voxelizer would use", [&](const std::string&) { gpu = true; }});
+    cmd.add({"--gpu", "", "also report the EGL device the GPU voxelizer would use (--voxelizer auto uses it when it is hardware)", [&](const std::string&) { gpu = true; }});
     bool help;
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
     if (help) return 0;

@@ -435,6 +435,21 @@ def test_repeated_warnings_collapse():
         check(lines[2].startswith("raysplat: error: ") and "no triangles" in lines[2], "error: %r" % lines[2])
 
 
+def test_auto_voxelizer_follows_the_egl_device():
+    """--voxelizer auto runs the GPU voxelizer on a hardware EGL device and the CPU one
+    otherwise (on llvmpipe, or with no EGL at all), as `info --gpu` describes the device."""
+    info = run("info", CORNELL, "--gpu")
+    check(info.returncode == 0, "info --gpu: exit %d: %r" % (info.returncode, info.stderr[-300:]))
+    gpu = [l for l in info.stdout.splitlines() if l.startswith("gpu")]
+    check(len(gpu) == 1, "info --gpu printed no one gpu line: %r" % info.stdout[-300:])
+    expected = "gpu" if "(hardware)" in gpu[0] else "cpu"
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_auto_") as out:
+        r = run("voxelize", CORNELL, "-o", os.path.join(out, "a.vdb"), "--grid", "48")
+        check(r.returncode == 0, "voxelize: exit %d: %r" % (r.returncode, r.stderr[-300:]))
+        check("voxelizing (%s)" % expected in r.stderr,
+              "device %r: expected the %s voxelizer, stderr %r" % (gpu[0], expected, r.stderr[-300:]))
+
+
 def test_cache_under_concurrent_writers():
     """Four voxelize runs share one --cache folder and start together (two at once, then two
     more while they write): all succeed, none warns of a broken cache file (a reader never
@@ -534,6 +549,7 @@ def main():
             test_unknown_command_is_an_error,
             test_repeated_warnings_collapse,
             test_cache_under_concurrent_writers,
+            test_auto_voxelizer_follows_the_egl_device,
             test_no_arguments_prints_usage_and_exits_2,
             test_help_of_each_command,
             test_good_render_writes_exr_png_and_stats,

@@ -212,6 +212,21 @@ std::string describeGpu() {
     return context.description();
 }
 
+bool hasHardwareGpu() {
+    const char* clientExt = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto queryDeviceString =
+        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    if (!clientExt || !queryDevices || !queryDeviceString || !hasExtension(clientExt, "EGL_EXT_platform_device"))
+        return false;
+    EGLDeviceEXT devices[16];
+    EGLint count = 0;
+    if (!queryDevices(16, devices, &count)) return false;
+    for (EGLint i = 0; i < count; ++i)
+        if (!hasExtension(queryDeviceString(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software")) return true;
+    return false;
+}
+
 }  // namespace rs
 
 #else  // !RAYSPLAT_HAVE_EGL
@@ -225,6 +240,7 @@ GpuContext::~GpuContext() = default;
 std::string GpuContext::description() const { return {}; }
 void GpuContext::check(const char*) {}
 std::string describeGpu() { throw Error(ErrorKind::Gpu, "built without EGL (meson option -Degl=enabled)"); }
+bool hasHardwareGpu() { return false; }
 
 }  // namespace rs
 

@@ -30,6 +30,10 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+// Whether EGL lists a hardware device (one without EGL_MESA_device_software): asks for the
+// devices only, makes no display or context. False in a build without EGL.
+bool hasHardwareGpu();
+
 // Creates a context and returns its description (for `raysplat info --gpu`); throws
 // Error(Gpu) when there is none (including a build without EGL).
 std::string describeGpu();

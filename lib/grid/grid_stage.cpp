@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "grid/gpu_context.h"
 #include "grid/vdb_io.h"
 #include "grid/voxelize.h"
 
@@ -43,9 +44,12 @@ bool loadCached(const std::string& path, const std::string& key, const GridGeome
     return true;
 }
 
+// "auto": the GPU voxelizer on a hardware EGL device; with none, the CPU voxelizer, which gives
+// the same grid faster than EGL's software rasterizer (llvmpipe: 0.21 against 0.07 s for the
+// glossy box at 192³ on 2 cores, voxelize_bench).
 OcclusionGrid voxelize(const Scene& scene, const GridGeometry& geometry, const std::string& voxelizer,
                        ThreadPool& pool, Reporter& reporter, VoxelizerKind& used) {
-    if (voxelizer == "cpu") {
+    if (voxelizer == "cpu" || (voxelizer == "auto" && !hasHardwareGpu())) {
         used = VoxelizerKind::Cpu;
         return voxelizeCpu(scene, geometry, pool, reporter);
     }
