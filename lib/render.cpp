@@ -300,7 +300,8 @@ void writeOutputs(RenderResult& result, const RenderConfig& cfg) {
     // All or nothing: every file is written under a temporary name first.
     StagedFiles& out = *result.outputs;
     throwIfStopped();
-    writeExrTo(out.stage(cfg.output), cfg.output, result.film, result.attributes);
+    writeExrTo(out.stage(cfg.output), cfg.output, result.film, result.attributes,
+               cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads());
     if (!cfg.png.empty()) writeFileTo(out.stage(cfg.png), cfg.png, encodePng(result.film, cfg.exposure));
     if (!cfg.statsJson.empty()) writeFileTo(out.stage(cfg.statsJson), cfg.statsJson, result.stats.json());
     throwIfStopped();  // the last moment a stop leaves nothing: the renames follow

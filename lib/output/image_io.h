@@ -25,7 +25,9 @@ ExrImage readExr(const std::string& path);
 // The bytes of the PNG preview: exposure in stops, clamp, sRGB transfer, 8-bit RGB.
 std::string encodePng(const Film& film, float exposureStops);
 // Writes beauty R,G,B plus <layer>.R/G/B, albedo.*, normal.* as float channels to `file` as is
-// (the caller stages it: StagedFiles); errors name `path`.
-void writeExrTo(const std::string& file, const std::string& path, const Film& film, const ImageAttributes& attributes);
+// (the caller stages it: StagedFiles); errors name `path`. The ZIP blocks are compressed on
+// `threads` threads (≥ 1); the file's bytes do not depend on how many.
+void writeExrTo(const std::string& file, const std::string& path, const Film& film, const ImageAttributes& attributes,
+                int threads = 1);
 
 }  // namespace rs
