@@ -5,9 +5,10 @@
 //  - With a cache directory: looks for <cacheDir>/<cacheKey>.vdb and loads it when its metadata
 //    key and grid geometry match; a stale or unreadable cache file is recomputed with a
 //    warning and rewritten. With --voxelizer auto the GPU key is tried first, then the
-//    CPU key (auto may have fallen back to the CPU when the file was made).
-//  - Otherwise voxelizes: "gpu" (Error(Gpu) without EGL), "cpu", or "auto" (GPU, falling
-//    back to the CPU with a warning when EGL is unusable).
+//    CPU key (auto uses the CPU without a hardware EGL device, or after the GPU failed).
+//  - Otherwise voxelizes: "gpu" (Error(Gpu) without EGL), "cpu", or "auto" (the GPU when EGL
+//    lists a hardware device, falling back to the CPU with a warning when it is unusable;
+//    the CPU at once when EGL offers only a software device such as llvmpipe).
 //  - Writes the .vdb file when one is named (an error there is an error of the run; a cache file that
 //    cannot be written is only a warning).
 // Records the time "voxelize" (the whole stage, load or compute) and the counts "voxels",
@@ -27,7 +28,7 @@ namespace rs {
 
 struct GridSettings {
     int resolution = 192;            // voxels along the scene's longest axis, 1..kMaxGridResolution
-    std::string voxelizer = "auto";  // auto (GPU, CPU when EGL is unusable), gpu, cpu
+    std::string voxelizer = "auto";  // auto (GPU on a hardware EGL device, else CPU), gpu, cpu
     std::string vdb;                 // optional: write the grid used as .vdb
     std::string cacheDir;            // optional: voxel cache directory (<key>.vdb files)
 };
