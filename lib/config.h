@@ -77,7 +77,7 @@ struct RenderConfig {
 
     // Occlusion grid (docs/design.md §5–6).
     int grid = GridSettings{}.resolution;             // voxels along the scene's longest axis
-    std::string voxelizer = GridSettings{}.voxelizer;  // auto (GPU, CPU when EGL is unusable), gpu, cpu
+    std::string voxelizer = GridSettings{}.voxelizer;  // auto (GPU on a hardware EGL device, else CPU), gpu, cpu
     std::string vdb;                                  // optional: write the grid used as .vdb
     std::string cacheDir;                             // optional: voxel cache directory (<key>.vdb files)
     GridSettings gridSettings() const { return {grid, voxelizer, vdb, cacheDir}; }
