@@ -55,6 +55,36 @@ struct Candidate {
     bool software;
 };
 
+struct Device {
+    EGLDeviceEXT device;
+    const char* extensions;  // the device's, or null
+    bool software;           // EGL_MESA_device_software
+};
+
+// The devices EGL lists (EGL_EXT_platform_device); none, with the reason added to `reasons`,
+// when it cannot list them.
+std::vector<Device> listDevices(const char* clientExt, std::string& reasons) {
+    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto queryDeviceString =
+        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    std::vector<Device> out;
+    if (!queryDevices || !queryDeviceString || !hasExtension(clientExt, "EGL_EXT_platform_device")) {
+        reasons += "no EGL_EXT_platform_device; ";
+        return out;
+    }
+    EGLDeviceEXT devices[16];
+    EGLint count = 0;
+    if (!queryDevices(16, devices, &count) || count <= 0) {
+        reasons += "eglQueryDevicesEXT found no device; ";
+        return out;
+    }
+    for (EGLint i = 0; i < count; ++i) {
+        const char* ext = queryDeviceString(devices[i], EGL_EXTENSIONS);
+        out.push_back({devices[i], ext, hasExtension(ext, "EGL_MESA_device_software")});
+    }
+    return out;
+}
+
 // Hardware devices first, then software ones (llvmpipe), then the surfaceless platform.
 std::vector<Candidate> candidateDisplays(std::string& reasons) {
     std::vector<Candidate> out;
@@ -65,39 +95,28 @@ std::vector<Candidate> candidateDisplays(std::string& reasons) {
     }
     auto getPlatformDisplay =
         reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
-    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
     auto queryDeviceString =
         reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
     if (!getPlatformDisplay) {
         reasons += "no eglGetPlatformDisplayEXT";
         return out;
     }
-    if (queryDevices && queryDeviceString && hasExtension(clientExt, "EGL_EXT_platform_device")) {
-        EGLDeviceEXT devices[16];
-        EGLint count = 0;
-        if (queryDevices(16, devices, &count) && count > 0) {
-            std::vector<Candidate> software;
-            for (EGLint i = 0; i < count; ++i) {
-                const char* ext = queryDeviceString(devices[i], EGL_EXTENSIONS);
-                bool isSoftware = hasExtension(ext, "EGL_MESA_device_software");
-                const char* file = hasExtension(ext, "EGL_EXT_device_drm")
-                                       ? queryDeviceString(devices[i], EGL_DRM_DEVICE_FILE_EXT)
-                                       : nullptr;
-                EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
-                std::string label = "EGL device " + std::to_string(i) + (file ? std::string(" (") + file + ")" : "");
-                if (d == EGL_NO_DISPLAY) {
-                    reasons += label + ": no display (" + eglErrorName(eglGetError()) + "); ";
-                    continue;
-                }
-                (isSoftware ? software : out).push_back({d, label, isSoftware});
-            }
-            out.insert(out.end(), software.begin(), software.end());
-        } else {
-            reasons += "eglQueryDevicesEXT found no device; ";
+    std::vector<Candidate> software;
+    const std::vector<Device> devices = listDevices(clientExt, reasons);
+    for (size_t i = 0; i < devices.size(); ++i) {
+        const Device& dev = devices[i];
+        const char* file = hasExtension(dev.extensions, "EGL_EXT_device_drm")
+                               ? queryDeviceString(dev.device, EGL_DRM_DEVICE_FILE_EXT)
+                               : nullptr;
+        EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, dev.device, nullptr);
+        std::string label = "EGL device " + std::to_string(i) + (file ? std::string(" (") + file + ")" : "");
+        if (d == EGL_NO_DISPLAY) {
+            reasons += label + ": no display (" + eglErrorName(eglGetError()) + "); ";
+            continue;
         }
-    } else {
-        reasons += "no EGL_EXT_platform_device; ";
+        (dev.software ? software : out).push_back({d, label, dev.software});
     }
+    out.insert(out.end(), software.begin(), software.end());
     if (hasExtension(clientExt, "EGL_MESA_platform_surfaceless")) {
         EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
         if (d != EGL_NO_DISPLAY) out.push_back({d, "EGL surfaceless platform", false});
@@ -214,16 +233,10 @@ std::string describeGpu() {
 
 bool hasHardwareGpu() {
     const char* clientExt = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    auto queryDeviceString =
-        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
-    if (!clientExt || !queryDevices || !queryDeviceString || !hasExtension(clientExt, "EGL_EXT_platform_device"))
-        return false;
-    EGLDeviceEXT devices[16];
-    EGLint count = 0;
-    if (!queryDevices(16, devices, &count)) return false;
-    for (EGLint i = 0; i < count; ++i)
-        if (!hasExtension(queryDeviceString(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software")) return true;
+    if (!clientExt) return false;
+    std::string reasons;
+    for (const Device& d : listDevices(clientExt, reasons))
+        if (!d.software) return true;
     return false;
 }
 
