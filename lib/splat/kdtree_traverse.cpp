@@ -396,12 +396,11 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
                          _mm_mul_ps(_mm_sub_ps(wy, wide_.gridOrigin[1]), wide_.invVoxel),
                          _mm_mul_ps(_mm_sub_ps(wz, wide_.gridOrigin[2]), wide_.invVoxel)};
     const __m128 dx = _mm_sub_ps(p[0], wide_.o[0]), dy = _mm_sub_ps(p[1], wide_.o[1]), dz = _mm_sub_ps(p[2], wide_.o[2]);
-    auto dot = [&](const __m128 v[3]) { return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, v[0]), _mm_mul_ps(dy, v[1])), _mm_mul_ps(dz, v[2])); };
-    const __m128 along = dot(wide_.w);
+    const __m128 along = dot4(wide_.w, dx, dy, dz);
     const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
     __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length));
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), wide_.kernel2));
-    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot(wide_.n), _mm_setzero_ps()));
+    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(wide_.n, dx, dy, dz), _mm_setzero_ps()));
     const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
     if (!bits) return 0;
     // floorToInt four at a time: truncate, then step down where that went up.
@@ -409,7 +408,7 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
         const __m128i t = _mm_cvttps_epi32(x);
         return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
     };
-    const __m128 u = dot(wide_.aU), v = dot(wide_.aV), half = _mm_set1_ps(0.5f);
+    const __m128 u = dot4(wide_.aU, dx, dy, dz), v = dot4(wide_.aV, dx, dy, dz), half = _mm_set1_ps(0.5f);
     _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
     _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floor4(_mm_sub_ps(u, half)), wide_.halfU));
     _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floor4(_mm_sub_ps(v, half)), wide_.halfV));

@@ -75,6 +75,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/simd.h"
 #include "splat/eye.h"
 #include "splat/kdtree.h"
 

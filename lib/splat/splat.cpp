@@ -264,7 +264,7 @@ struct Lanes {
     static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
         return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
     }
-    __m128 dot(const __m128 v[3]) const { return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2])); }
+    __m128 dot(const __m128 v[3]) const { return dot4(v, x, y, z); }
 };
 #endif
 

@@ -11,6 +11,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/simd.h"
 #include "output/film.h"
 #include "scene/accel.h"
 #include "splat/kdtree_traverse.h"
@@ -93,18 +94,15 @@ public:
     uint32_t surelyVisible4(__m128 x, __m128 y, __m128 z) const {
         if (blockerCount_ < 0) return 0;
         const __m128 rx = _mm_sub_ps(x, wide_.origin[0]), ry = _mm_sub_ps(y, wide_.origin[1]), rz = _mm_sub_ps(z, wide_.origin[2]);
-        auto dot = [](const __m128 v[3], __m128 a, __m128 b, __m128 c) {
-            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(v[0], a), _mm_mul_ps(v[1], b)), _mm_mul_ps(v[2], c));
-        };
         __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
         for (int k = 0; k < blockerCount_; ++k) {
             const WideBlocker& b = wide_.blockers[k];
-            const __m128 side = _mm_sub_ps(dot(b.n, x, y, z), b.d);
+            const __m128 side = _mm_sub_ps(dot4(b.n, x, y, z), b.d);
             __m128 clear = _mm_cmpgt_ps(side, b.margin);
             if (_mm_movemask_ps(_mm_andnot_ps(clear, all)) != 0) {  // some live lane is behind the plane
                 const __m128 reach = _mm_mul_ps(b.margin, _mm_sub_ps(b.height, side));
                 for (int e = 0; e < 3; ++e)
-                    clear = _mm_or_ps(clear, _mm_cmpgt_ps(_mm_mul_ps(dot(b.edge[e], rx, ry, rz), b.height), reach));
+                    clear = _mm_or_ps(clear, _mm_cmpgt_ps(_mm_mul_ps(dot4(b.edge[e], rx, ry, rz), b.height), reach));
                 all = _mm_and_ps(all, clear);
                 if (_mm_movemask_ps(all) == 0) return 0;
             }

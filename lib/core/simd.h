@@ -1,0 +1,16 @@
+// Four-lane (SSE2) helpers shared by the traversal and the splat.
+#pragma once
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+
+namespace rs {
+
+// v·(x, y, z) lane by lane, as (x·v₀ + y·v₁) + z·v₂: glm::dot's order, so each lane gives the
+// scalar dot's value to the bit.
+inline __m128 dot4(const __m128 v[3], __m128 x, __m128 y, __m128 z) {
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, v[0]), _mm_mul_ps(y, v[1])), _mm_mul_ps(z, v[2]));
+}
+
+}  // namespace rs
+#endif
