@@ -288,6 +288,25 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
     float fx = x - float(ix), fy = y - float(iy);
     // Valid cells only; num ≤ den term by term, so occ ≤ 1 and four full cells give exactly 1.
     float num = 0.f, den = 0.f;
+    if (unsigned(i0) < unsigned(sizeU_ - 1) && unsigned(j0) < unsigned(sizeV_ - 1)) {
+        // The whole block inside the mask (every reached sample's, by the mask's size): each
+        // row's valid range read once, and a skipped cell's weight made 0 instead of branching
+        // (adding 0 leaves num and den as they were, so the sums are the same to the bit).
+        const float* row0 = &s_.sweep[size_t(i0) + size_t(sizeU_) * size_t(j0)];
+        const float* row1 = row0 + sizeU_;
+        const int lo0 = s_.rowLo[size_t(j0)], hi0 = s_.rowHi[size_t(j0)];
+        const int lo1 = s_.rowLo[size_t(j0) + 1], hi1 = s_.rowHi[size_t(j0) + 1];
+        auto add = [&](bool valid, float weight, float value) {
+            weight = valid && weight > 0.f ? weight : 0.f;
+            num += weight * std::min(1.f, value);
+            den += weight;
+        };
+        add(i0 >= lo0 && i0 <= hi0, (1.f - fx) * (1.f - fy), row0[0]);
+        add(i0 + 1 >= lo0 && i0 + 1 <= hi0, fx * (1.f - fy), row0[1]);
+        add(i0 >= lo1 && i0 <= hi1, (1.f - fx) * fy, row1[0]);
+        add(i0 + 1 >= lo1 && i0 + 1 <= hi1, fx * fy, row1[1]);
+        return num > 0.f ? 1.f - num / den : 1.f;
+    }
     auto cell = [&](int i, int j, float weight) {
         if (weight <= 0.f) return;
         if (j >= 0 && j < sizeV_ ? !validMaskCell(i, j) : !validCell(i - halfU_, j - halfV_)) return;
