@@ -156,8 +156,8 @@ int main() {
     }
 
     std::printf("\n  traversal, up to %zu cylinders a run (~0.4 s), length U(0, %d), medians of 3\n", count, kRes);
-    std::printf("  %6s | %14s | %14s | %8s | %9s %9s %9s %9s %9s %9s\n", "radius", "1 thread (c/s)", "all thr. (c/s)",
-                "speedup", "nodes/c", "occl./c", "tested/c", "samples/c", "swept/c", "visited/c");
+    std::printf("  %6s | %14s | %14s | %8s | %9s %9s %9s %9s %9s %9s %9s\n", "radius", "1 thread (c/s)", "all thr. (c/s)",
+                "speedup", "nodes/c", "occl./c", "tested/c", "samples/c", "swept/c", "boxed/c", "visited/c");
     double checksum = 0;
     for (float radius : {1.f, 2.f, 4.f, 8.f}) {
         for (Cylinder& c : cylinders) c.radius = radius;
@@ -196,9 +196,10 @@ int main() {
         }
         double r1 = median3(rate[0][0], rate[0][1], rate[0][2]), rn = median3(rate[1][0], rate[1][1], rate[1][2]);
         double per = 1.0 / double(ts.cylinders);
-        std::printf("  %6.0f | %14.0f | %14.0f | %7.2fx | %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f\n", double(radius), r1, rn, rn / r1,
-                    double(ts.nodes) * per, double(ts.occluders) * per, double(ts.samplesTested) * per,
-                    double(ts.samplesReached) * per, double(ts.samplesSwept) * per, double(ts.samplesVisited) * per);
+        std::printf("  %6.0f | %14.0f | %14.0f | %7.2fx | %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f\n", double(radius), r1, rn,
+                    rn / r1, double(ts.nodes) * per, double(ts.occluders) * per, double(ts.samplesTested) * per,
+                    double(ts.samplesReached) * per, double(ts.samplesSwept) * per, double(ts.samplesBoxed) * per,
+                    double(ts.samplesVisited) * per);
     }
     std::printf("  (checksum %.3g)\n", checksum);
     return 0;

@@ -433,6 +433,7 @@ TEST(OcclusionTreeTraversal, MatchesBruteForceOnRandomGrids) {
     TraversalScratch scratch;
     Comparison total;
     size_t cylinders = 0, occluded = 0;
+    TraversalStats stats;
     for (int trial = 0; trial < 6; ++trial) {
         IVec3 dims(20 + 3 * trial, 26 - trial, 18 + 2 * trial);
         OcclusionGrid grid = randomGrid(rng, dims, 0.04f + 0.03f * trial);
@@ -452,7 +453,9 @@ TEST(OcclusionTreeTraversal, MatchesBruteForceOnRandomGrids) {
                 cyl.originNormal = glm::dot(nrm, cyl.dir) < 0.f ? -nrm : nrm;
             }
             std::vector<float> brute = bruteForceVisibility(grid, samples, tree.sampleCount, cyl);
-            std::vector<float> got = traverse(tree, samples, cyl, scratch);
+            TraversalStats st;
+            std::vector<float> got = traverse(tree, samples, cyl, scratch, &st);
+            stats.add(st);
             Comparison cmp = compare(got, brute);
             EXPECT_EQ(cmp.setMismatch, 0u) << "trial " << trial << " cylinder " << c;
             EXPECT_EQ(cmp.valueMismatch, 0u) << "trial " << trial << " cylinder " << c << " max error " << cmp.maxError;
@@ -467,8 +470,63 @@ TEST(OcclusionTreeTraversal, MatchesBruteForceOnRandomGrids) {
     EXPECT_GT(total.reached, 10000u);
     EXPECT_GT(total.partial, 1000u);
     EXPECT_GT(occluded, cylinders / 4);  // and in many of the cylinders, not in a few
-    std::printf("  %zu cylinders (%zu with partly occluded samples), %zu samples reached (%zu partly occluded), "
-                "max |ΔV| %.2g\n", cylinders, occluded, total.reached, total.partial, double(total.maxError));
+    std::printf("  %zu cylinders (%zu with partly occluded samples), %zu samples reached (%zu partly occluded, %zu "
+                "taken a box at a time), max |ΔV| %.2g\n", cylinders, occluded, total.reached, total.partial,
+                size_t(stats.samplesBoxed), double(total.maxError));
+}
+
+// Samples on surfaces and wide cylinders, as in a render: many bricks and octants lie wholly
+// inside a cylinder, away from every occluder, and are taken without their positions being
+// read. What they give must be what testing each sample gives (the brute force).
+TEST(OcclusionTreeTraversal, BoxesTakenWholeMatchBruteForceOnSurfaces) {
+    std::mt19937 rng(77);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    const IVec3 dims(48, 40, 44);
+    OcclusionGrid grid = randomGrid(rng, dims, 0.003f);
+    for (int z = 10; z < 22; ++z)  // a slab over part of the floor, shadowing it from above
+        for (int x = 8; x < 20; ++x) setCounts(grid, x, 14, z, {{kNegY, 16}});
+    std::vector<Vec3> points;
+    for (int i = 0; i < 36000; ++i) {
+        const float a = u01(rng), b = u01(rng);
+        switch (i % 3) {
+            case 0: points.push_back(Vec3(a * dims.x, 3.37f, b * dims.z)); break;             // floor
+            case 1: points.push_back(Vec3(40.61f, a * dims.y, b * dims.z)); break;            // wall
+            default: points.push_back(Vec3(a * 30.f, 6.f + 0.7f * a * 30.f, b * dims.z));  // slope
+        }
+    }
+    EyeSamples samples = makeSamples(grid.geometry, points);
+    ThreadPool pool(2);
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+    TraversalScratch scratch;
+    TraversalStats stats;
+    Comparison total;
+    for (int c = 0; c < 80; ++c) {
+        Cylinder cyl;
+        cyl.dir = randomDirection(rng);
+        if (c % 2 == 0) {  // leaving the floor, upwards
+            cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
+            cyl.originNormal = Vec3(0.f, 1.f, 0.f);
+            if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
+        } else {
+            cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
+        }
+        cyl.radius = 4.f + u01(rng) * 8.f;
+        cyl.length = 5.f + u01(rng) * 50.f;
+        std::vector<float> brute = bruteForceVisibility(grid, samples, tree.sampleCount, cyl);
+        TraversalStats st;
+        std::vector<float> got = traverse(tree, samples, cyl, scratch, &st);
+        stats.add(st);
+        Comparison cmp = compare(got, brute);
+        EXPECT_EQ(cmp.setMismatch, 0u) << "cylinder " << c;
+        EXPECT_EQ(cmp.valueMismatch, 0u) << "cylinder " << c << " max error " << cmp.maxError;
+        total.reached += cmp.reached;
+        total.partial += cmp.partial;
+    }
+    // Not vacuous: the boxes hold a good part of the reached samples, and others are shadowed.
+    EXPECT_GT(stats.samplesBoxed, stats.samplesReached / 10);
+    EXPECT_GT(total.partial, 500u);
+    std::printf("  %zu samples reached, %zu taken a box at a time, %zu partly occluded\n", total.reached,
+                size_t(stats.samplesBoxed), total.partial);
 }
 
 namespace {

@@ -282,7 +282,10 @@ inline bool CylinderTraversal::shadowable(int i0, int j0) const {
 
 // A met brick's samples, by octant: each octant's part of the box its samples lie in is tested
 // first (boxMayBeReached; gatherBrick tested the whole box), so that what the cylinder cannot
-// reach is not read; what the splat reads of a reached sample is asked for first.
+// reach is not read; what the splat reads of a reached sample is asked for first. A box whose
+// samples are all surely reached and unshadowed (boxSurelyUnshadowed), the whole brick's or an
+// octant's, goes to the unshadowed list without its positions being read: the list is the
+// same, in the same order, as when each sample is tested.
 void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     const Brick& brick = tree_.bricks[met.brick];
     const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
@@ -291,6 +294,16 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
     s_.unshadowed.clear();
+    auto takeAll = [&](uint32_t first, uint32_t last) {
+        const size_t at = s_.unshadowed.size();
+        s_.unshadowed.resize(at + (last - first));
+        for (uint32_t i = first; i < last; ++i) s_.unshadowed[at + (i - first)] = i;
+        st_.samplesReached += last - first, st_.samplesBoxed += last - first;
+    };
+    if (boxSurelyUnshadowed(lo, hi)) {
+        takeAll(brick.firstSample, brick.firstSample + brick.sampleCount);
+        return;
+    }
     if (!brick.divided()) {
         gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount);
         return;
@@ -301,7 +314,9 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         if (first == last) continue;
         const Vec3 octant = corner + Vec3(float(2 * (k & 1)), float(k & 2), float(k >> 1 & 2));
         const Vec3 partLo = glm::max(lo, octant - kEdge), partHi = glm::min(hi, octant + (2.f + kEdge));
-        if (boxMayBeReached(partLo, partHi)) gatherSampleRange(met.entry, first, last);
+        if (!boxMayBeReached(partLo, partHi)) continue;
+        if (boxSurelyUnshadowed(partLo, partHi)) takeAll(first, last);
+        else gatherSampleRange(met.entry, first, last);
     }
 }
 
@@ -318,6 +333,39 @@ bool CylinderTraversal::boxMayBeReached(const Vec3& lo, const Vec3& hi) const {
     if (hasNormal_ && glm::dot(d, n_) + glm::dot(glm::abs(n_), half) + kSlack <= 0.f) return false;
     const float reach = radius_ + glm::length(half) + kSlack;
     return glm::dot(d, d) - along * along < reach * reach;
+}
+
+// Whether every point of the box [lo, hi] (voxel space) is reached — depth in (0, L], within h
+// of the axis, in front of the origin's tangent plane — and has a bilinear block no occluder
+// can shadow, as reach() and shadowable() decide for a sample. Each bound is narrowed by a
+// margin far above the rounding of those per-sample tests (a few ulps of the distances
+// involved), so that a sample this lets through is one they let through.
+bool CylinderTraversal::boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) const {
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
+    const Vec3 c = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
+    const Vec3 d = c - o_;
+    const float halfLength = glm::length(half), size = glm::length(d) + halfLength + 1.f;
+    const float slack = 0.01f + 1e-5f * size;  // on depths, heights and projections (voxels)
+    const float slack2 = 4e-5f * size * size;  // on squared distances
+    const float along = glm::dot(d, w_), spread = glm::dot(glm::abs(w_), half);
+    if (!(along - spread > slack && along + spread <= L_ - slack)) return false;
+    if (hasNormal_ && !(glm::dot(d, n_) - glm::dot(glm::abs(n_), half) > slack)) return false;
+    // The distance to the axis line changes by at most the distance moved: no point of the box
+    // is farther than the centre's distance + halfLength.
+    const float farthest = std::sqrt(std::max(0.f, glm::dot(d, d) - along * along) + slack2) + halfLength + slack;
+    if (!(farthest * farthest + slack2 < kernel2_)) return false;
+    // The first cells of the box's points' bilinear blocks: a rectangle of the mask.
+    const float u = glm::dot(d, aU_), du = glm::dot(glm::abs(aU_), half) + slack;
+    const float v = glm::dot(d, aV_), dv = glm::dot(glm::abs(aV_), half) + slack;
+    const int i0 = floorToInt(u - du - 0.5f) + halfU_, i1 = floorToInt(u + du - 0.5f) + halfU_;
+    const int j0 = floorToInt(v - dv - 0.5f) + halfV_, j1 = floorToInt(v + dv - 0.5f) + halfV_;
+    if (i0 < 0 || j0 < 0 || i1 >= sizeU_ || j1 >= sizeV_) return false;
+    for (int j = j0; j <= j1; ++j) {
+        const uint8_t* row = &s_.shadowable[size_t(sizeU_) * size_t(j)];
+        for (int i = i0; i <= i1; ++i)
+            if (row[i]) return false;
+    }
+    return true;
 }
 
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's

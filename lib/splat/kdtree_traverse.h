@@ -93,11 +93,12 @@ struct TraversalStats {
     uint64_t cylinders = 0, nodes = 0, pruned = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
     uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
     uint64_t samplesSwept = 0;   // reached samples an occluder may shadow: read in the slice sweep
+    uint64_t samplesBoxed = 0;   // reached samples taken a box at a time, their positions not read
     uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
     void add(const TraversalStats& o) {
         cylinders += o.cylinders, nodes += o.nodes, pruned += o.pruned, occluders += o.occluders;
         samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
-        samplesTested += o.samplesTested, samplesSwept += o.samplesSwept;
+        samplesTested += o.samplesTested, samplesSwept += o.samplesSwept, samplesBoxed += o.samplesBoxed;
     }
 };
 
@@ -193,7 +194,9 @@ public:
 // bricks that hold samples (§5.1–5.3); visitSamples() reaches the samples of those bricks and
 // hands over at once, while the brick's arrays are in cache, the ones that read V = 1 in any
 // slice (none of their bilinear cells holds an occluder: 90 % of them at the paper's settings on
-// the glossy box); sweep() reads the others' visibility slice by slice (§5.1).
+// the glossy box) — a brick's or an octant's at once, positions unread, when the box its samples
+// lie in is surely reached and unshadowed (59 % of them there); sweep() reads the others'
+// visibility slice by slice (§5.1).
 class CylinderTraversal {
 public:
     CylinderTraversal(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl, TraversalScratch& s);
@@ -247,6 +250,7 @@ private:
     bool reach(const Vec3& world, Reach& r) const;
     uint32_t reach4(const Vec3* world, Reach4& r) const;
     bool boxMayBeReached(const Vec3& lo, const Vec3& hi) const;
+    bool boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) const;
     bool shadowable(int i0, int j0) const;
 
     // Sweep.

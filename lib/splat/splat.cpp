@@ -86,6 +86,7 @@ void SplatStats::report(Stats& stats) const {
     stats.setCount("traversal_samples_visited", double(traversal.samplesVisited));
     stats.setCount("traversal_samples_tested", double(traversal.samplesTested));
     stats.setCount("traversal_samples_swept", double(traversal.samplesSwept));
+    stats.setCount("traversal_samples_boxed", double(traversal.samplesBoxed));
     stats.setCount("splat_visibility_rays", double(visibilityRays));
     stats.setCount("splat_visible_by_planes", double(visibleByPlanes));
     stats.setCount("splat_refused_behind_origin", double(refused[SegmentReceivers::kBehindOrigin]));
