@@ -1,6 +1,8 @@
 // The steps of CylinderTraversal (kdtree_traverse.h states the rules they implement).
 #include "splat/kdtree_traverse.h"
 
+#include <numeric>
+
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -297,7 +299,7 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     auto takeAll = [&](uint32_t first, uint32_t last) {
         const size_t at = s_.unshadowed.size();
         s_.unshadowed.resize(at + (last - first));
-        for (uint32_t i = first; i < last; ++i) s_.unshadowed[at + (i - first)] = i;
+        std::iota(s_.unshadowed.begin() + std::ptrdiff_t(at), s_.unshadowed.end(), first);
         st_.samplesReached += last - first, st_.samplesBoxed += last - first;
     };
     if (boxSurelyUnshadowed(lo, hi)) {
