@@ -6,6 +6,7 @@
 // 192³): 5 MB tree, 26 MB eye samples.
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include "splat/kdtree.h"
@@ -110,7 +111,11 @@ double median3(double a, double b, double c) { return std::max(std::min(a, b), s
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+    // Optional arguments: the radii to time (default 1 2 4 8), e.g. `kdtree_bench 8` for a profile.
+    std::vector<float> radii;
+    for (int i = 1; i < argc; ++i) radii.push_back(std::strtof(argv[i], nullptr));
+    if (radii.empty()) radii = {1.f, 2.f, 4.f, 8.f};
     ThreadPool pool(0);
     std::printf("kdtree benchmark: %d³ synthetic glossy box, %d threads\n", kRes, pool.size());
     Timer setup;
@@ -159,7 +164,7 @@ int main() {
     std::printf("  %6s | %14s | %14s | %8s | %9s %9s %9s %9s %9s %9s %9s\n", "radius", "1 thread (c/s)", "all thr. (c/s)",
                 "speedup", "nodes/c", "occl./c", "tested/c", "samples/c", "swept/c", "boxed/c", "visited/c");
     double checksum = 0;
-    for (float radius : {1.f, 2.f, 4.f, 8.f}) {
+    for (float radius : radii) {
         for (Cylinder& c : cylinders) c.radius = radius;
         double rate[2][3];
         TraversalStats ts;

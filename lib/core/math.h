@@ -34,6 +34,15 @@ inline int floorToInt(float x) {
     const int i = int(x);
     return i - (x < float(i));
 }
+inline int ceilToInt(float x) { return -floorToInt(-x); }
+// The number of set bits, in a few instructions where the popcnt instruction is not assumed
+// (the builtin is then a library call).
+inline int bitCount(uint64_t v) {
+    v -= (v >> 1) & 0x5555555555555555ull;
+    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
+    v = (v + (v >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    return int((v * 0x0101010101010101ull) >> 56);
+}
 
 struct Bounds3 {
     Vec3 lo{kInf};

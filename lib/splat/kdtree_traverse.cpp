@@ -252,7 +252,7 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
         const Vec3 c(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f);
         if (!inFrontOfTangent(c) || (!surelyMet(c) && !voxelMet(x, y, z))) continue;
-        const uint32_t rank = uint32_t(__builtin_popcountll(brick.occupied & ((uint64_t(1) << bit) - 1)));
+        const uint32_t rank = uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)));
         addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
     }
 }
@@ -526,8 +526,8 @@ void CylinderTraversal::metRange(const StackEntry& e, int i0[3], int i1[3]) cons
     Vec3 lo, hi;
     nodeBounds(e, lo, hi);
     for (int b = 0; b < 3; ++b) {
-        i0[b] = std::max(int(e.lo[b]), int(std::floor(lo[b])) - 1);
-        i1[b] = std::min(int(e.hi[b]), int(std::ceil(hi[b])) + 1);
+        i0[b] = std::max(int(e.lo[b]), floorToInt(lo[b]) - 1);
+        i1[b] = std::min(int(e.hi[b]), ceilToInt(hi[b]) + 1);
     }
 }
 
@@ -557,8 +557,8 @@ bool CylinderTraversal::prunable(const StackEntry& e) const {
     auto range = [&](int A, float k, int half, int& i0, int& i1) {
         const float n0 = k * (lo[N_] - o_[N_]), n1 = k * (hi[N_] - o_[N_]);
         const float uMin = (lo[A] - o_[A]) - std::max(n0, n1), uMax = (hi[A] - o_[A]) - std::min(n0, n1);
-        i0 = int(std::floor(uMin - 0.5f)) - 1 + half;
-        i1 = int(std::floor(uMax - 0.5f)) + 2 + half;
+        i0 = floorToInt(uMin - 0.5f) - 1 + half;
+        i1 = floorToInt(uMax - 0.5f) + 2 + half;
     };
     int u0, u1, v0, v1;
     range(U_, kU_, halfU_, u0, u1);
