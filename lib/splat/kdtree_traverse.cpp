@@ -84,13 +84,13 @@ bool CylinderTraversal::validCell(int i, int j) const {
     return glm::dot(q, q) - along * along <= valid2_;
 }
 
-// The valid cells of each mask row j: [rowLo[j], rowHi[j]] (mask indices, may reach past the
-// mask; empty when rowLo > rowHi). Per row the cells' distance² to the axis is a convex
+// The valid cells of each mask row j: [rows[j].lo, rows[j].hi] (mask indices, may reach past
+// the mask; empty when lo > hi). Per row the cells' distance² to the axis is a convex
 // quadratic in i (second difference 2(1 − ω_U²) ≥ 1, far above rounding), so the valid cells
 // are contiguous; the bounds are estimated analytically, then settled with validCell itself so
 // that they agree with it exactly.
 void CylinderTraversal::findValidRows() {
-    if (s_.rowLo.size() < size_t(sizeV_)) s_.rowLo.resize(size_t(sizeV_)), s_.rowHi.resize(size_t(sizeV_));
+    if (s_.rows.size() < size_t(sizeV_)) s_.rows.resize(size_t(sizeV_));
     const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_], qc = 1.f - w_[V_] * w_[V_];
     for (int j = 0; j < sizeV_; ++j) {
         const int jj = j - halfV_;
@@ -102,7 +102,7 @@ void CylinderTraversal::findValidRows() {
             if (validCell(ic - 1, jj)) --ic;
             else if (validCell(ic + 1, jj)) ++ic;
             else {
-                s_.rowLo[size_t(j)] = INT_MAX / 2, s_.rowHi[size_t(j)] = INT_MIN / 2;
+                s_.rows[size_t(j)] = {INT_MAX / 2, INT_MIN / 2};
                 continue;
             }
         }
@@ -114,7 +114,7 @@ void CylinderTraversal::findValidRows() {
         while (validCell(lo - 1, jj)) --lo;
         while (hi > ic && !validCell(hi, jj)) --hi;
         while (validCell(hi + 1, jj)) ++hi;
-        s_.rowLo[size_t(j)] = lo + halfU_, s_.rowHi[size_t(j)] = hi + halfU_;
+        s_.rows[size_t(j)] = {lo + halfU_, hi + halfU_};
     }
 }
 
@@ -566,7 +566,7 @@ bool CylinderTraversal::prunable(const StackEntry& e) const {
     if (u0 < 0 || v0 < 0 || u1 >= sizeU_ || v1 >= sizeV_) return false;
     const int firstSlice = forward_ ? int(e.lo[N_]) : dimN_ - int(e.hi[N_]);
     for (int j = v0; j <= v1; ++j) {
-        const int i0 = std::max(u0, s_.rowLo[size_t(j)]), i1 = std::min(u1, s_.rowHi[size_t(j)]);
+        const int i0 = std::max(u0, s_.rows[size_t(j)].lo), i1 = std::min(u1, s_.rows[size_t(j)].hi);
         const FillCell* row = &s_.fill[size_t(sizeU_) * size_t(j)];
         for (int i = i0; i <= i1; ++i)
             if (row[i].stamp != stamp_ || row[i].fullAt >= firstSlice) return false;

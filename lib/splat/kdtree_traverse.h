@@ -126,6 +126,9 @@ struct MetBrick {  // a brick leaf the cylinder meets, with its part of the cyli
     StackEntry entry;
     uint32_t brick;
 };
+struct RowRange {  // a mask row's valid cells, [lo, hi]
+    int32_t lo, hi;
+};
 struct FillCell {  // early-exit bookkeeping, valid when stamp matches the cylinder
     uint32_t stamp = 0;
     float sum = 0;
@@ -185,7 +188,7 @@ public:
     EventVector<kd_detail::SampleEvent> samples, samplesSorted;
     EventVector<uint32_t> unshadowed;  // one brick's reached samples that read V = 1 in any slice
     std::vector<uint32_t> histogram;
-    std::vector<int> rowLo, rowHi;  // the valid cells of each mask row
+    std::vector<kd_detail::RowRange> rows;  // the valid cells of each mask row
     uint32_t stamp = 0;
 };
 
@@ -212,11 +215,12 @@ public:
 private:
     using StackEntry = kd_detail::StackEntry;
     using SampleEvent = kd_detail::SampleEvent;
+    using RowRange = kd_detail::RowRange;
 
     // Mask set-up.
     void findValidRows();
     bool validCell(int i, int j) const;  // relative to the mask centre
-    bool validMaskCell(int i, int j) const { return i >= s_.rowLo[size_t(j)] && i <= s_.rowHi[size_t(j)]; }
+    bool validMaskCell(int i, int j) const { return i >= s_.rows[size_t(j)].lo && i <= s_.rows[size_t(j)].hi; }
     int sliceOf(int vN) const { return forward_ ? vN : dimN_ - 1 - vN; }
 
     // Gathering.
@@ -293,22 +297,42 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
     // Valid cells only; num ≤ den term by term, so occ ≤ 1 and four full cells give exactly 1.
     float num = 0.f, den = 0.f;
     if (unsigned(i0) < unsigned(sizeU_ - 1) && unsigned(j0) < unsigned(sizeV_ - 1)) {
-        // The whole block inside the mask (every reached sample's, by the mask's size): each
-        // row's valid range read once, and a skipped cell's weight made 0 instead of branching
-        // (adding 0 leaves num and den as they were, so the sums are the same to the bit).
+        // The whole block inside the mask (every reached sample's, by the mask's size).
         const float* row0 = &s_.sweep[size_t(i0) + size_t(sizeU_) * size_t(j0)];
         const float* row1 = row0 + sizeU_;
-        const int lo0 = s_.rowLo[size_t(j0)], hi0 = s_.rowHi[size_t(j0)];
-        const int lo1 = s_.rowLo[size_t(j0) + 1], hi1 = s_.rowHi[size_t(j0) + 1];
+#if defined(__SSE2__)
+        // The four cells in lanes (i0, j0), (i0 + 1, j0), (i0, j0 + 1), (i0 + 1, j0 + 1); an
+        // invalid cell's weight made 0. Both sums are added in the same order, so num ≤ den.
+        const __m128 value = _mm_min_ps(_mm_set1_ps(1.f),
+                                        _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(row0)),
+                                                     reinterpret_cast<const __m64*>(row1)));
+        const __m128i range = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&s_.rows[size_t(j0)]));  // lo0 hi0 lo1 hi1
+        const __m128i lo = _mm_shuffle_epi32(range, _MM_SHUFFLE(2, 2, 0, 0)), hi = _mm_shuffle_epi32(range, _MM_SHUFFLE(3, 3, 1, 1));
+        const __m128i cell = _mm_add_epi32(_mm_set1_epi32(i0), _mm_setr_epi32(0, 1, 0, 1));
+        const __m128 invalid = _mm_castsi128_ps(_mm_or_si128(_mm_cmplt_epi32(cell, lo), _mm_cmpgt_epi32(cell, hi)));
+        const __m128 wx = _mm_add_ps(_mm_setr_ps(1.f, 0.f, 1.f, 0.f), _mm_mul_ps(_mm_setr_ps(-1.f, 1.f, -1.f, 1.f), _mm_set1_ps(fx)));
+        const __m128 wy = _mm_add_ps(_mm_setr_ps(1.f, 1.f, 0.f, 0.f), _mm_mul_ps(_mm_setr_ps(-1.f, -1.f, 1.f, 1.f), _mm_set1_ps(fy)));
+        const __m128 weight = _mm_andnot_ps(invalid, _mm_mul_ps(wx, wy));
+        const __m128 term = _mm_mul_ps(weight, value);
+        // (t0 + t2) + (t1 + t3) and the same for the weights.
+        const __m128 pairs = _mm_add_ps(_mm_shuffle_ps(term, weight, _MM_SHUFFLE(1, 0, 1, 0)),
+                                        _mm_shuffle_ps(term, weight, _MM_SHUFFLE(3, 2, 3, 2)));
+        const __m128 sums = _mm_add_ps(pairs, _mm_shuffle_ps(pairs, pairs, _MM_SHUFFLE(2, 3, 0, 1)));
+        num = _mm_cvtss_f32(sums), den = _mm_cvtss_f32(_mm_movehl_ps(sums, sums));
+#else
+        // Each row's valid range read once, and a skipped cell's weight made 0 instead of
+        // branching (adding 0 leaves num and den as they were).
+        const RowRange r0 = s_.rows[size_t(j0)], r1 = s_.rows[size_t(j0) + 1];
         auto add = [&](bool valid, float weight, float value) {
             weight = valid && weight > 0.f ? weight : 0.f;
             num += weight * std::min(1.f, value);
             den += weight;
         };
-        add(i0 >= lo0 && i0 <= hi0, (1.f - fx) * (1.f - fy), row0[0]);
-        add(i0 + 1 >= lo0 && i0 + 1 <= hi0, fx * (1.f - fy), row0[1]);
-        add(i0 >= lo1 && i0 <= hi1, (1.f - fx) * fy, row1[0]);
-        add(i0 + 1 >= lo1 && i0 + 1 <= hi1, fx * fy, row1[1]);
+        add(i0 >= r0.lo && i0 <= r0.hi, (1.f - fx) * (1.f - fy), row0[0]);
+        add(i0 + 1 >= r0.lo && i0 + 1 <= r0.hi, fx * (1.f - fy), row0[1]);
+        add(i0 >= r1.lo && i0 <= r1.hi, (1.f - fx) * fy, row1[0]);
+        add(i0 + 1 >= r1.lo && i0 + 1 <= r1.hi, fx * fy, row1[1]);
+#endif
         return num > 0.f ? 1.f - num / den : 1.f;
     }
     auto cell = [&](int i, int j, float weight) {
