@@ -66,6 +66,9 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     s_.occluders.clear();
     s_.samples.clear();
     s_.bricks.clear();
+    const size_t slices = size_t(dimN_ + kMaxAmbiguousOffset);
+    if (s_.sampleSlices.size() < slices) s_.sampleSlices.resize(slices, 0), s_.occluderSlices.resize(slices, 0);
+    sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;
 }
 
 // The sweep mask and the shadowable map are all zero between cylinders: clear what this one
@@ -73,6 +76,8 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
 CylinderTraversal::~CylinderTraversal() {
     for (const OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
     markShadowable(0);
+    for (int i = sliceMin_; i <= sliceMax_; ++i) s_.sampleSlices[size_t(i)] = 0;
+    for (int i = occluderMin_; i <= occluderMax_; ++i) s_.occluderSlices[size_t(i)] = 0;
 }
 
 // Cell (i, j), relative to the mask centre: its centre within h + margin of the axis line.
@@ -390,6 +395,8 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
         SampleEvent& ev = s_.samples[n++];
         ev.index = i;
         ev.slice = sliceOf(std::clamp(r.voxelN, sliceLo, sliceHi));
+        ++s_.sampleSlices[size_t(ev.slice)];
+        sliceMin_ = std::min(sliceMin_, ev.slice), sliceMax_ = std::max(sliceMax_, ev.slice);
         ev.u = r.u;
         ev.v = r.v;
     };
@@ -502,6 +509,8 @@ void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel
     }
     const int cell = cu + sizeU_ * cv;
     s_.occluders.push_back({cell, slice, occ});
+    ++s_.occluderSlices[size_t(slice)];
+    occluderMin_ = std::min(occluderMin_, slice), occluderMax_ = std::max(occluderMax_, slice);
     ++st_.occluders;
     FillCell& f = s_.fill[size_t(cell)];
     if (f.stamp != stamp_) f = FillCell{stamp_, 0.f, INT_MIN, INT_MAX};
@@ -576,34 +585,31 @@ bool CylinderTraversal::prunable(const StackEntry& e) const {
 
 // -- The slice sweep (§5.1) -------------------------------------------------------------------
 
-// Sorts the shadowable samples by slice, as the occluders (counting sort, stable). Occluders
-// before the first sample's slice are read by every sample: added at once.
+// Sorts the sample events by slice, and the occluder events of their slices (counting sorts,
+// stable, over the per-slice counts made with the events). Occluders before the first sample's
+// slice are read by every sample: added at once; those after the last one's, by none.
 void CylinderTraversal::prepareSweep() {
     s_.samplesSorted.clear();
     s_.occludersSorted.clear();
     st_.samplesSwept += s_.samples.size();
-    if (s_.samples.empty()) {
-        sliceMin_ = 0, sliceMax_ = -1;
-        return;
-    }
-    sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;
-    for (const SampleEvent& ev : s_.samples) sliceMin_ = std::min(sliceMin_, ev.slice), sliceMax_ = std::max(sliceMax_, ev.slice);
-    for (const OccluderEvent& ev : s_.occluders) sliceMax_ = std::max(sliceMax_, ev.slice);  // later ones are harmless
-    const size_t slices = size_t(sliceMax_ - sliceMin_ + 1);
-    auto countingSort = [&](auto& in, auto& out, auto key) {
-        s_.histogram.assign(slices + 1, 0);
-        size_t n = 0;
-        for (const auto& ev : in)
-            if (key(ev) >= sliceMin_) ++s_.histogram[size_t(key(ev) - sliceMin_) + 1], ++n;
-        for (size_t i = 1; i <= slices; ++i) s_.histogram[i] += s_.histogram[i - 1];
-        out.resize(n);
-        for (const auto& ev : in)
-            if (key(ev) >= sliceMin_) out[s_.histogram[size_t(key(ev) - sliceMin_)]++] = ev;
+    if (s_.samples.empty()) return;
+    // Counts to first positions, in place.
+    auto offsets = [](uint32_t* count, int lo, int hi) {
+        uint32_t at = 0;
+        for (int i = lo; i <= hi; ++i) {
+            const uint32_t c = count[i];
+            count[i] = at, at += c;
+        }
+        return at;
     };
-    for (const OccluderEvent& ev : s_.occluders)
+    s_.samplesSorted.resize(offsets(s_.sampleSlices.data(), sliceMin_, sliceMax_));
+    for (const SampleEvent& ev : s_.samples) s_.samplesSorted[s_.sampleSlices[size_t(ev.slice)]++] = ev;
+    const int lo = std::max(sliceMin_, occluderMin_), hi = std::min(sliceMax_, occluderMax_);
+    s_.occludersSorted.resize(lo <= hi ? offsets(s_.occluderSlices.data(), lo, hi) : 0);
+    for (const OccluderEvent& ev : s_.occluders) {
         if (ev.slice < sliceMin_) s_.sweep[size_t(ev.cell)] += ev.occ;
-    countingSort(s_.samples, s_.samplesSorted, [](const SampleEvent& ev) { return ev.slice; });
-    countingSort(s_.occluders, s_.occludersSorted, [](const OccluderEvent& ev) { return ev.slice; });
+        else if (ev.slice <= sliceMax_) s_.occludersSorted[s_.occluderSlices[size_t(ev.slice)]++] = ev;
+    }
 }
 
 }  // namespace rs

@@ -187,7 +187,9 @@ public:
     EventVector<kd_detail::OccluderEvent> occluders, occludersSorted;
     EventVector<kd_detail::SampleEvent> samples, samplesSorted;
     EventVector<uint32_t> unshadowed;  // one brick's reached samples that read V = 1 in any slice
-    std::vector<uint32_t> histogram;
+    // Per slice: how many sample and occluder events this cylinder has there (zero between
+    // cylinders), counted as they are made, for the sweep's counting sort.
+    std::vector<uint32_t> sampleSlices, occluderSlices;
     std::vector<kd_detail::RowRange> rows;  // the valid cells of each mask row
     uint32_t stamp = 0;
 };
@@ -278,7 +280,8 @@ private:
     bool forward_, hasNormal_;
     uint32_t stamp_ = 0;
     size_t fullCount_ = 0;
-    int sliceMin_ = 0, sliceMax_ = 0;  // the sweep's slices
+    int sliceMin_ = 0, sliceMax_ = -1;  // the sample events' slices
+    int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
     struct Wide {  // reach4's numbers, each in all four lanes, set once a cylinder
         __m128 gridOrigin[3], o[3], w[3], n[3], aU[3], aV[3], invVoxel, length, kernel2;
@@ -371,7 +374,7 @@ void CylinderTraversal::sweep(Visit&& visit) {
     size_t is = 0, io = 0;
     const EventVector<SampleEvent>& samples = s_.samplesSorted;
     const EventVector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
-    for (int slice = sliceMin_; slice <= sliceMax_ && is < samples.size(); ++slice) {
+    for (int slice = sliceMin_; is < samples.size(); ++slice) {
         for (; is < samples.size() && samples[is].slice == slice; ++is) {
             const float vis = read(samples[is]);
             if (vis > 0.f) visit(samples[is].index, vis), ++st_.samplesVisited;
