@@ -558,7 +558,7 @@ float distanceToAxis(const Cylinder& c, Vec3 p) {
 }  // namespace
 
 TEST(OcclusionTreeTraversal, SolidWallStopsEverythingBehindIt) {
-    WallScene scene(true), open(false);
+    WallScene scene(true);
     TraversalScratch scratch;
     for (Vec3 dir : {Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, -0.2f, 1.f)), glm::normalize(Vec3(-0.6f, 0.5f, 1.f))}) {
         Cylinder cyl;
@@ -566,7 +566,7 @@ TEST(OcclusionTreeTraversal, SolidWallStopsEverythingBehindIt) {
         cyl.dir = dir;
         cyl.radius = 3.f;
         cyl.length = 29.f / dir.z;
-        TraversalStats st, stOpen, stToWall;
+        TraversalStats st;
         std::vector<float> v = traverse(scene.tree, scene.samples, cyl, scratch, &st);
         Comparison cmp = compare(v, bruteForceVisibility(scene.grid, scene.samples, scene.tree.sampleCount, cyl));
         EXPECT_EQ(cmp.setMismatch + cmp.valueMismatch, 0u);
@@ -580,29 +580,9 @@ TEST(OcclusionTreeTraversal, SolidWallStopsEverythingBehindIt) {
         EXPECT_GT(front, 100u);
         EXPECT_GT(behindInside, 100u);
         EXPECT_EQ(behind, 0u) << "samples lit behind the wall";
-        // Early exit: the nodes behind the wall are skipped once the wall's cells are full.
-        // kd order is not slice order (a near child's part behind the wall can come before
-        // a far child's part of the wall), so some nodes behind it are still visited.
-        // (stToWall, the cylinder stopped at the wall, is the floor of the work.)
-        traverse(open.tree, open.samples, cyl, scratch, &stOpen);
-        Cylinder toWall = cyl;
-        toWall.length = 15.f / dir.z;
-        traverse(scene.tree, scene.samples, toWall, scratch, &stToWall);
-        // The work is in the bricks' voxels and samples. A brick that straddles the wall is
-        // walked whole, and a node is skipped only once its cells' bilinear neighbours (in
-        // the next columns of bricks) are full too, so along an axis little is saved; at an
-        // angle the traversal gathers less than without the wall.
-        const auto work = [](const TraversalStats& t) { return double(t.occluders + t.samplesReached); };
-        EXPECT_GT(st.pruned, 0u);
-        // Along the axis the wall's own occluders about balance the samples it hides (1008
-        // against 1011 with gcc, 1000 against 990 with clang's floating-point contraction).
-        EXPECT_LE(work(st), 1.05 * work(stOpen));
-        if (dir.x != 0.f) {
-            EXPECT_LT(work(st), 0.9 * work(stOpen));
-        }
-        std::printf("  dir (%.2f %.2f %.2f): occluders + samples %.0f (no wall %.0f, stopping at the wall %.0f), "
-                    "nodes %llu, pruned %llu\n", double(dir.x), double(dir.y), double(dir.z), work(st), work(stOpen),
-                    work(stToWall), (unsigned long long)st.nodes, (unsigned long long)st.pruned);
+        std::printf("  dir (%.2f %.2f %.2f): occluders %llu, samples reached %llu, nodes %llu\n", double(dir.x),
+                    double(dir.y), double(dir.z), (unsigned long long)st.occluders, (unsigned long long)st.samplesReached,
+                    (unsigned long long)st.nodes);
     }
 }
 

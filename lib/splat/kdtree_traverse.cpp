@@ -48,13 +48,8 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     halfV_ = int(std::ceil(r_[V_] + 1.f + (r_[N_] + 1.f) * std::abs(kV_))) + 2;
     sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
     const size_t cells = size_t(sizeU_) * size_t(sizeV_);
-    if (s_.fill.size() < cells) s_.fill.resize(cells), s_.sweep.resize(cells), s_.shadowable.resize(cells);
+    if (s_.sweep.size() < cells) s_.sweep.resize(cells), s_.shadowable.resize(cells);
     findValidRows();
-    if (++s_.stamp == 0) {
-        for (FillCell& c : s_.fill) c.stamp = 0;
-        s_.stamp = 1;
-    }
-    stamp_ = s_.stamp;
 #if defined(__SSE2__)
     for (int a = 0; a < 3; ++a) {
         wide_.gridOrigin[a] = _mm_set1_ps(g_.origin[a]), wide_.o[a] = _mm_set1_ps(o_[a]), wide_.w[a] = _mm_set1_ps(w_[a]);
@@ -125,9 +120,7 @@ void CylinderTraversal::findValidRows() {
 
 // -- Gathering occluders and samples (§5.1–5.3) ----------------------------------------------
 
-// From the root, the part of [0, L] whose disc boxes touch the grid, near child first. Pruning
-// depends on the occluders alone, so walking the samples afterwards (visitSamples) leaves the
-// nodes visited and the occluders found as they were.
+// From the root, the part of [0, L] whose disc boxes touch the grid, near child first.
 void CylinderTraversal::gather() {
     StackEntry e{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
     clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), e.t0, e.t1);
@@ -142,10 +135,6 @@ void CylinderTraversal::gather() {
         }
         next = false;
         ++st_.nodes;
-        if (fullCount_ > 0 && prunable(e)) {
-            ++st_.pruned;
-            continue;
-        }
         const Node node = tree_.nodes[e.node];
         if (node.type() == NodeType::Split) {
             next = descend(e, node);
@@ -284,7 +273,12 @@ void CylinderTraversal::markShadowable(uint8_t value) {
 inline bool CylinderTraversal::shadowable(int i0, int j0) const {
     if (unsigned(i0) < unsigned(sizeU_) && unsigned(j0) < unsigned(sizeV_))
         return s_.shadowable[size_t(i0) + size_t(sizeU_) * size_t(j0)] != 0;
-    return touched(i0, j0) || touched(i0 + 1, j0) || touched(i0, j0 + 1) || touched(i0 + 1, j0 + 1);
+    // A block at the mask's edge (none is, by the mask's size): cells outside hold nothing.
+    for (const OccluderEvent& ev : s_.occluders) {
+        const int cu = ev.cell % sizeU_, cv = ev.cell / sizeU_;
+        if ((cu == i0 || cu == i0 + 1) && (cv == j0 || cv == j0 + 1)) return true;
+    }
+    return false;
 }
 
 // A met brick's samples, by octant: each octant's part of the box its samples lie in is tested
@@ -386,7 +380,8 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
     size_t n = s_.samples.size(), free = s_.unshadowed.size();
     s_.samples.resize(n + (last - first));
     s_.unshadowed.resize(free + (last - first));
-    const int sliceLo = e.lo[N_], sliceHi = int(e.hi[N_]) - 1;
+    const int layerLo = e.lo[N_], layerHi = int(e.hi[N_]) - 1;
+    int sliceMin = sliceMin_, sliceMax = sliceMax_;  // kept in registers, not written through `this`
     auto add = [&](uint32_t i, const Reach& r) {
         if (!shadowable(r.i0, r.j0)) {
             s_.unshadowed[free++] = i;
@@ -394,9 +389,10 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
         }
         SampleEvent& ev = s_.samples[n++];
         ev.index = i;
-        ev.slice = sliceOf(std::clamp(r.voxelN, sliceLo, sliceHi));
-        ++s_.sampleSlices[size_t(ev.slice)];
-        sliceMin_ = std::min(sliceMin_, ev.slice), sliceMax_ = std::max(sliceMax_, ev.slice);
+        const int slice = sliceOf(std::clamp(r.voxelN, layerLo, layerHi));
+        ev.slice = slice;
+        ++s_.sampleSlices[size_t(slice)];
+        sliceMin = std::min(sliceMin, slice), sliceMax = std::max(sliceMax, slice);
         ev.u = r.u;
         ev.v = r.v;
     };
@@ -415,6 +411,7 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
         Reach r;
         if (reach(eye_.position[i], r)) add(i, r);
     }
+    sliceMin_ = sliceMin, sliceMax_ = sliceMax;
     st_.samplesReached += n + free - before;
     st_.samplesTested += last - first;
     s_.samples.resize(n);
@@ -491,8 +488,7 @@ void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
 
 // An occupied, met voxel strictly in front of the origin's tangent plane (the callers test
 // both, the cheaper plane first) adds its occlusion along ω to the cell of its centre's
-// projection, in its (ambiguity-offset) slice; the fill bookkeeping records when each cell
-// becomes full, for the early exit.
+// projection, in its (ambiguity-offset) slice.
 void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel) {
     const Vec3 c(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f);
     float occ = 0.f;
@@ -512,13 +508,6 @@ void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel
     ++s_.occluderSlices[size_t(slice)];
     occluderMin_ = std::min(occluderMin_, slice), occluderMax_ = std::max(occluderMax_, slice);
     ++st_.occluders;
-    FillCell& f = s_.fill[size_t(cell)];
-    if (f.stamp != stamp_) f = FillCell{stamp_, 0.f, INT_MIN, INT_MAX};
-    if (f.fullAt == INT_MAX) {
-        f.sum += occ;
-        f.maxSlice = std::max(f.maxSlice, slice);
-        if (f.sum >= 1.f) f.fullAt = f.maxSlice, ++fullCount_;
-    }
 }
 
 // Bounds of the cylinder part in a node: its t-range's disc boxes, clipped to the node.
@@ -555,32 +544,6 @@ bool CylinderTraversal::voxelMet(int x, int y, int z) const {
     const Vec3 lo{float(x), float(y), float(z)};
     clipToBox(o_, w_, r_, lo, lo + 1.f, t0, t1);
     return t0 <= t1;
-}
-
-// Early exit: every valid cell the node's points project to (and their bilinear neighbours)
-// was full before the node's first slice.
-bool CylinderTraversal::prunable(const StackEntry& e) const {
-    Vec3 lo, hi;
-    nodeBounds(e, lo, hi);
-    for (int b = 0; b < 3; ++b) lo[b] = std::max(float(e.lo[b]), lo[b] - 1.f), hi[b] = std::min(float(e.hi[b]), hi[b] + 1.f);
-    auto range = [&](int A, float k, int half, int& i0, int& i1) {
-        const float n0 = k * (lo[N_] - o_[N_]), n1 = k * (hi[N_] - o_[N_]);
-        const float uMin = (lo[A] - o_[A]) - std::max(n0, n1), uMax = (hi[A] - o_[A]) - std::min(n0, n1);
-        i0 = floorToInt(uMin - 0.5f) - 1 + half;
-        i1 = floorToInt(uMax - 0.5f) + 2 + half;
-    };
-    int u0, u1, v0, v1;
-    range(U_, kU_, halfU_, u0, u1);
-    range(V_, kV_, halfV_, v0, v1);
-    if (u0 < 0 || v0 < 0 || u1 >= sizeU_ || v1 >= sizeV_) return false;
-    const int firstSlice = forward_ ? int(e.lo[N_]) : dimN_ - int(e.hi[N_]);
-    for (int j = v0; j <= v1; ++j) {
-        const int i0 = std::max(u0, s_.rows[size_t(j)].lo), i1 = std::min(u1, s_.rows[size_t(j)].hi);
-        const FillCell* row = &s_.fill[size_t(sizeU_) * size_t(j)];
-        for (int i = i0; i <= i1; ++i)
-            if (row[i].stamp != stamp_ || row[i].fullAt >= firstSlice) return false;
-    }
-    return true;
 }
 
 // -- The slice sweep (§5.1) -------------------------------------------------------------------

@@ -52,12 +52,12 @@
 //    cylinder and light would leak through walls at small h.
 // The definition does not depend on the kd order: the traversal collects the met
 // occluders and reached samples (CylinderTraversal::gather), then sweeps them slice by slice
-// (sweep); a sample none of whose four cells holds an occluder reads V = 1 at once. Near-to-far kd order
-// (lower child first iff ω_a ≥ 0) serves the early exit: once a node's every sample would
-// read full cells and its occluders could only add to full cells — all the cells its
-// projection touches were filled by occluders of slices before the node's first slice — it
-// is skipped (a wall stops the traversal behind it). Only valid cells count. Cylinder parts
-// outside the grid or past L are never visited. At a brick leaf the occupied voxels (its mask's
+// (sweep); a sample none of whose four cells holds an occluder reads V = 1 at once. The kd
+// order is near to far (lower child first iff ω_a ≥ 0); nothing depends on it. (An early
+// exit that skipped nodes whose cells were all full before their first slice was measured:
+// it pruned ~2 % of the nodes it tested and cost more than it saved, in renders of interiors
+// too; the answers are the same without it.) Cylinder parts outside the grid or past L are
+// never visited. At a brick leaf the occupied voxels (its mask's
 // bits inside the cylinder part's bounds) that are met become occluders and its samples that
 // are reached are collected (octants of the brick out of the cylinder's reach are skipped
 // whole); a collapsed Occlusion block contributes each of its met voxels.
@@ -90,13 +90,13 @@ struct Cylinder {
 };
 
 struct TraversalStats {
-    uint64_t cylinders = 0, nodes = 0, pruned = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
+    uint64_t cylinders = 0, nodes = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
     uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
     uint64_t samplesSwept = 0;   // reached samples an occluder may shadow: read in the slice sweep
     uint64_t samplesBoxed = 0;   // reached samples taken a box at a time, their positions not read
     uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
     void add(const TraversalStats& o) {
-        cylinders += o.cylinders, nodes += o.nodes, pruned += o.pruned, occluders += o.occluders;
+        cylinders += o.cylinders, nodes += o.nodes, occluders += o.occluders;
         samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
         samplesTested += o.samplesTested, samplesSwept += o.samplesSwept, samplesBoxed += o.samplesBoxed;
     }
@@ -128,11 +128,6 @@ struct MetBrick {  // a brick leaf the cylinder meets, with its part of the cyli
 };
 struct RowRange {  // a mask row's valid cells, [lo, hi]
     int32_t lo, hi;
-};
-struct FillCell {  // early-exit bookkeeping, valid when stamp matches the cylinder
-    uint32_t stamp = 0;
-    float sum = 0;
-    int32_t maxSlice = INT_MIN, fullAt = INT_MAX;
 };
 
 inline int majorAxis(const Vec3& w) {
@@ -180,7 +175,6 @@ Overloaded(Fns...) -> Overloaded<Fns...>;
 class TraversalScratch {
 public:
     std::vector<kd_detail::StackEntry> stack;
-    std::vector<kd_detail::FillCell> fill;
     std::vector<float> sweep;
     std::vector<uint8_t> shadowable;  // per mask cell: one of the 2×2 cells from it on holds an occluder
     std::vector<kd_detail::MetBrick> bricks;  // the met bricks that hold samples, in kd order
@@ -191,7 +185,6 @@ public:
     // cylinders), counted as they are made, for the sweep's counting sort.
     std::vector<uint32_t> sampleSlices, occluderSlices;
     std::vector<kd_detail::RowRange> rows;  // the valid cells of each mask row
-    uint32_t stamp = 0;
 };
 
 // One cylinder's traversal, in the paper's steps: the mask is set up by the constructor
@@ -239,7 +232,6 @@ private:
     void metRange(const StackEntry& e, int i0[3], int i1[3]) const;
     bool surelyMet(const Vec3& p) const;
     bool voxelMet(int x, int y, int z) const;
-    bool prunable(const StackEntry& e) const;
 
     // Reaching the samples.
     void markShadowable(uint8_t value);
@@ -262,9 +254,6 @@ private:
     // Sweep.
     void prepareSweep();
     float read(const SampleEvent& ev) const;
-    bool touched(int i, int j) const {
-        return i >= 0 && j >= 0 && i < sizeU_ && j < sizeV_ && s_.fill[size_t(i) + size_t(sizeU_) * size_t(j)].stamp == stamp_;
-    }
 
     const OcclusionTree& tree_;
     const EyeSamples& eye_;
@@ -278,8 +267,6 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
-    uint32_t stamp_ = 0;
-    size_t fullCount_ = 0;
     int sliceMin_ = 0, sliceMax_ = -1;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
