@@ -548,6 +548,59 @@ bool CylinderTraversal::voxelMet(int x, int y, int z) const {
 
 // -- The slice sweep (§5.1) -------------------------------------------------------------------
 
+#if defined(__SSE2__)
+// read() for four sample events, lane by lane the same operations in the same order (so the
+// same values): the four events' cells and rows' valid ranges loaded per lane, then turned so
+// that each vector holds one corner of the four blocks.
+void CylinderTraversal::read4(const SampleEvent* ev, float vis[4]) const {
+    static_assert(sizeof(SampleEvent) == 16, "an event is one vector: index, slice, u, v");
+    __m128 r[4];
+    for (int k = 0; k < 4; ++k) r[k] = _mm_loadu_ps(reinterpret_cast<const float*>(ev + k));
+    _MM_TRANSPOSE4_PS(r[0], r[1], r[2], r[3]);  // the indices, slices, u's and v's
+    const __m128 half = _mm_set1_ps(0.5f), x = _mm_sub_ps(r[2], half), y = _mm_sub_ps(r[3], half);
+    auto floor4 = [](__m128 a) {
+        const __m128i t = _mm_cvttps_epi32(a);
+        return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(a, _mm_cvtepi32_ps(t))));
+    };
+    const __m128i ix = floor4(x), iy = floor4(y);
+    const __m128 fx = _mm_sub_ps(x, _mm_cvtepi32_ps(ix)), fy = _mm_sub_ps(y, _mm_cvtepi32_ps(iy));
+    const __m128i i0 = _mm_add_epi32(ix, _mm_set1_epi32(halfU_)), j0 = _mm_add_epi32(iy, _mm_set1_epi32(halfV_));
+    alignas(16) int32_t is[4], js[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(is), i0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(js), j0);
+    __m128 cell[4], range[4];
+    for (int k = 0; k < 4; ++k) {
+        if (!(unsigned(is[k]) < unsigned(sizeU_ - 1) && unsigned(js[k]) < unsigned(sizeV_ - 1))) {
+            for (int m = 0; m < 4; ++m) vis[m] = read(ev[m]);  // a block at the mask's edge (none, by its size)
+            return;
+        }
+        const float* row0 = &s_.sweep[size_t(is[k]) + size_t(sizeU_) * size_t(js[k])];
+        cell[k] = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(row0)),
+                               reinterpret_cast<const __m64*>(row0 + sizeU_));
+        range[k] = _mm_loadu_ps(reinterpret_cast<const float*>(&s_.rows[size_t(js[k])]));  // lo0 hi0 lo1 hi1
+    }
+    _MM_TRANSPOSE4_PS(cell[0], cell[1], cell[2], cell[3]);     // corners (0,0) (1,0) (0,1) (1,1)
+    _MM_TRANSPOSE4_PS(range[0], range[1], range[2], range[3]);  // lo0 hi0 lo1 hi1
+    const __m128i i1 = _mm_add_epi32(i0, _mm_set1_epi32(1));
+    auto outside = [](__m128i i, __m128 lo, __m128 hi) {
+        return _mm_castsi128_ps(_mm_or_si128(_mm_cmplt_epi32(i, _mm_castps_si128(lo)), _mm_cmpgt_epi32(i, _mm_castps_si128(hi))));
+    };
+    const __m128 one = _mm_set1_ps(1.f), gx = _mm_sub_ps(one, fx), gy = _mm_sub_ps(one, fy);
+    const __m128 w[4] = {_mm_andnot_ps(outside(i0, range[0], range[1]), _mm_mul_ps(gx, gy)),
+                         _mm_andnot_ps(outside(i1, range[0], range[1]), _mm_mul_ps(fx, gy)),
+                         _mm_andnot_ps(outside(i0, range[2], range[3]), _mm_mul_ps(gx, fy)),
+                         _mm_andnot_ps(outside(i1, range[2], range[3]), _mm_mul_ps(fx, fy))};
+    __m128 t[4];
+    for (int k = 0; k < 4; ++k) t[k] = _mm_mul_ps(w[k], _mm_min_ps(one, cell[k]));
+    // (t0 + t2) + (t1 + t3), as read() adds its lanes.
+    const __m128 num = _mm_add_ps(_mm_add_ps(t[0], t[2]), _mm_add_ps(t[1], t[3]));
+    const __m128 den = _mm_add_ps(_mm_add_ps(w[0], w[2]), _mm_add_ps(w[1], w[3]));
+    const __m128 lit = _mm_cmpgt_ps(num, _mm_setzero_ps());
+    const __m128 shadowed = _mm_sub_ps(one, _mm_div_ps(num, _mm_or_ps(den, _mm_andnot_ps(lit, one))));
+    _mm_store_ps(vis, _mm_or_ps(_mm_and_ps(lit, shadowed), _mm_andnot_ps(lit, one)));
+}
+#endif
+
 // Sorts the sample events by slice, and the occluder events of their slices (counting sorts,
 // stable, over the per-slice counts made with the events). Occluders before the first sample's
 // slice are read by every sample: added at once; those after the last one's, by none.

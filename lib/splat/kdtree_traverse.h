@@ -254,6 +254,7 @@ private:
     // Sweep.
     void prepareSweep();
     float read(const SampleEvent& ev) const;
+    void read4(const SampleEvent* ev, float vis[4]) const;
 
     const OcclusionTree& tree_;
     const EyeSamples& eye_;
@@ -362,7 +363,16 @@ void CylinderTraversal::sweep(Visit&& visit) {
     const EventVector<SampleEvent>& samples = s_.samplesSorted;
     const EventVector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
     for (int slice = sliceMin_; is < samples.size(); ++slice) {
-        for (; is < samples.size() && samples[is].slice == slice; ++is) {
+        const size_t end = s_.sampleSlices[size_t(slice)];  // the sort left each slice's end there
+#if defined(__SSE2__)
+        for (; is + 4 <= end; is += 4) {
+            alignas(16) float vis[4];
+            read4(&samples[is], vis);
+            for (int k = 0; k < 4; ++k)
+                if (vis[k] > 0.f) visit(samples[is + size_t(k)].index, vis[k]), ++st_.samplesVisited;
+        }
+#endif
+        for (; is < end; ++is) {
             const float vis = read(samples[is]);
             if (vis > 0.f) visit(samples[is].index, vis), ++st_.samplesVisited;
         }
