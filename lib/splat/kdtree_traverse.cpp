@@ -241,9 +241,8 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
     // the paper's settings): all of a brick's at once when their box is, else one by one,
     // before the costlier met test.
     if (!candidates || (hasNormal_ && allBehindTangent(e, candidates))) return;
-    auto add = [&](int bit, int x, int y, int z) {
-        const uint32_t rank = uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)));
-        addOccluder(x, y, z, tree_.voxels[brick.firstVoxel + rank]);
+    auto voxel = [&](int bit) {  // the rank of a bit among the occupied ones is where its counts are
+        return tree_.voxels[brick.firstVoxel + uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)))];
     };
 #if defined(__SSE2__)
     // Four candidates at a time: the tangent test and the sure met test in lanes, the same
@@ -269,15 +268,25 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
                                                                                   _mm_set1_ps(tangentOffset_))))
                                           : 15u;
         const unsigned met = unsigned(_mm_movemask_ps(sure));
+        if (!front) continue;
+        // The centres' cells, as projectCentre has them.
+        auto floor4 = [](__m128 a) {
+            const __m128i t = _mm_cvttps_epi32(a);
+            return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(a, _mm_cvtepi32_ps(t))));
+        };
+        alignas(16) int cu[4], cv[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floor4(dot4(wide_.aU, d[0], d[1], d[2])), wide_.halfU));
+        _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floor4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
         for (int k = 0; k < n; ++k)
-            if (front >> k & 1u && (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k]))) add(bit[k], v[0][k], v[1][k], v[2][k]);
+            if (front >> k & 1u && (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k])))
+                addOccluderAt(cu[k], cv[k], v[N_][k], voxel(bit[k]));
     }
 #else
     for (uint64_t bits = candidates; bits; bits &= bits - 1) {
         const int bit = __builtin_ctzll(bits);
         const int x = e.lo[0] + (bit & 3), y = e.lo[1] + ((bit >> 2) & 3), z = e.lo[2] + (bit >> 4);
         const Vec3 c(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f);
-        if (inFrontOfTangent(c) && (surelyMet(c) || voxelMet(x, y, z))) add(bit, x, y, z);
+        if (inFrontOfTangent(c) && (surelyMet(c) || voxelMet(x, y, z))) addOccluder(x, y, z, voxel(bit));
     }
 #endif
 }
@@ -521,15 +530,20 @@ void CylinderTraversal::gatherOcclusionBlock(const StackEntry& e, Node node) {
 // both, the cheaper plane first) adds its occlusion along ω to the cell of its centre's
 // projection, in its (ambiguity-offset) slice.
 void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel) {
-    const Vec3 c(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f);
+    // The centre's projection (u, v) = ((c − o)·aU, (c − o)·aV): the same value as
+    // (c_U − o_U) − k_U (c_N − o_N), the other terms being exact zeros and ones.
+    const Vec3 d = Vec3(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f) - o_;
+    const int v[3] = {ix, iy, iz};
+    addOccluderAt(floorToInt(glm::dot(d, aU_)) + halfU_, floorToInt(glm::dot(d, aV_)) + halfV_, v[N_], voxel);
+}
+
+// The occluder of voxel layer `layer` along N, its centre projecting into mask cell (cu, cv).
+void CylinderTraversal::addOccluderAt(int cu, int cv, int layer, VoxelOcclusion voxel) {
     float occ = 0.f;
     for (int a = 0; a < 3; ++a) occ += occWeight_[a] * float(voxel.count(side_[a]));
     occ = std::min(1.f, occ);
     if (occ <= 0.f) return;
-    const int v[3] = {ix, iy, iz};
-    const int slice = sliceOf(v[N_]) + (voxel.ambiguous() ? ambOffset_[voxel.dominantAxis()] : 0);
-    const int cu = floorToInt((c[U_] - o_[U_]) - kU_ * (c[N_] - o_[N_])) + halfU_;
-    const int cv = floorToInt((c[V_] - o_[V_]) - kV_ * (c[N_] - o_[N_])) + halfV_;
+    const int slice = sliceOf(layer) + (voxel.ambiguous() ? ambOffset_[voxel.dominantAxis()] : 0);
     if (cu < 0 || cv < 0 || cu >= sizeU_ || cv >= sizeV_) {
         ++st_.maskOverflow;
         return;

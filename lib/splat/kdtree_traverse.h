@@ -227,6 +227,7 @@ private:
     // (§5.2), past half the normal's L1 norm: the whole voxel box does.
     bool inFrontOfTangent(const Vec3& centre) const { return !hasNormal_ || glm::dot(centre - o_, n_) > tangentOffset_; }
     void addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel);
+    void addOccluderAt(int cu, int cv, int layer, VoxelOcclusion voxel);
     bool allBehindTangent(const StackEntry& e, uint64_t bits) const;
     void nodeBounds(const StackEntry& e, Vec3& lo, Vec3& hi) const;
     void metRange(const StackEntry& e, int i0[3], int i1[3]) const;
