@@ -27,6 +27,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     aU_ = Vec3(0.f), aV_ = Vec3(0.f);
     aU_[U_] = 1.f, aU_[N_] = -kU_;
     aV_[V_] = 1.f, aV_[N_] = -kV_;
+    absW_ = glm::abs(w_), absN_ = glm::abs(n_), absAU_ = glm::abs(aU_), absAV_ = glm::abs(aV_);
     forward_ = w_[N_] >= 0.f;
     dimN_ = g_.dims[N_];
     // Occluders: the back-facing sides along ω, projected onto the N plane; ambiguous voxels
@@ -369,9 +370,9 @@ bool CylinderTraversal::boxMayBeReached(const Vec3& lo, const Vec3& hi) const {
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
     const Vec3 c = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
     const Vec3 d = c - o_;
-    const float along = glm::dot(d, w_), spread = glm::dot(glm::abs(w_), half) + kSlack;
+    const float along = glm::dot(d, w_), spread = glm::dot(absW_, half) + kSlack;
     if (along + spread <= 0.f || along - spread > L_) return false;
-    if (hasNormal_ && glm::dot(d, n_) + glm::dot(glm::abs(n_), half) + kSlack <= 0.f) return false;
+    if (hasNormal_ && glm::dot(d, n_) + glm::dot(absN_, half) + kSlack <= 0.f) return false;
     const float reach = radius_ + glm::length(half) + kSlack;
     return glm::dot(d, d) - along * along < reach * reach;
 }
@@ -388,16 +389,16 @@ bool CylinderTraversal::boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) cons
     const float halfLength = glm::length(half), size = glm::length(d) + halfLength + 1.f;
     const float slack = 0.01f + 1e-5f * size;  // on depths, heights and projections (voxels)
     const float slack2 = 4e-5f * size * size;  // on squared distances
-    const float along = glm::dot(d, w_), spread = glm::dot(glm::abs(w_), half);
+    const float along = glm::dot(d, w_), spread = glm::dot(absW_, half);
     if (!(along - spread > slack && along + spread <= L_ - slack)) return false;
-    if (hasNormal_ && !(glm::dot(d, n_) - glm::dot(glm::abs(n_), half) > slack)) return false;
+    if (hasNormal_ && !(glm::dot(d, n_) - glm::dot(absN_, half) > slack)) return false;
     // The distance to the axis line changes by at most the distance moved: no point of the box
     // is farther than the centre's distance + halfLength.
     const float farthest = std::sqrt(std::max(0.f, glm::dot(d, d) - along * along) + slack2) + halfLength + slack;
     if (!(farthest * farthest + slack2 < kernel2_)) return false;
     // The first cells of the box's points' bilinear blocks: a rectangle of the mask.
-    const float u = glm::dot(d, aU_), du = glm::dot(glm::abs(aU_), half) + slack;
-    const float v = glm::dot(d, aV_), dv = glm::dot(glm::abs(aV_), half) + slack;
+    const float u = glm::dot(d, aU_), du = glm::dot(absAU_, half) + slack;
+    const float v = glm::dot(d, aV_), dv = glm::dot(absAV_, half) + slack;
     const int i0 = floorToInt(u - du - 0.5f) + halfU_, i1 = floorToInt(u + du - 0.5f) + halfU_;
     const int j0 = floorToInt(v - dv - 0.5f) + halfV_, j1 = floorToInt(v + dv - 0.5f) + halfV_;
     if (i0 < 0 || j0 < 0 || i1 >= sizeU_ || j1 >= sizeV_) return false;

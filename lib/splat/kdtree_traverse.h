@@ -264,6 +264,7 @@ private:
     TraversalStats st_;
     Vec3 o_, w_, n_;
     Vec3 aU_, aV_;  // u = (p − o)·aU, v = (p − o)·aV
+    Vec3 absW_, absN_, absAU_, absAV_;  // their components' magnitudes, for the box tests
     float L_, radius_, invVoxel_, hOcc_, kernel2_, valid2_, kU_, kV_, tangentOffset_;
     float r_[3], occWeight_[3];
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
