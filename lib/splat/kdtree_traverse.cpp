@@ -64,7 +64,6 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     s_.bricks.clear();
     const size_t slices = size_t(dimN_ + kMaxAmbiguousOffset);
     if (s_.sampleSlices.size() < slices) s_.sampleSlices.resize(slices, 0), s_.occluderSlices.resize(slices, 0);
-    sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;
 }
 
 // The sweep mask and the shadowable map are all zero between cylinders: clear what this one
@@ -270,14 +269,10 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
                                           : 15u;
         const unsigned met = unsigned(_mm_movemask_ps(sure));
         if (!front) continue;
-        // The centres' cells, as projectCentre has them.
-        auto floor4 = [](__m128 a) {
-            const __m128i t = _mm_cvttps_epi32(a);
-            return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(a, _mm_cvtepi32_ps(t))));
-        };
+        // The centres' cells, projected as addOccluder projects one.
         alignas(16) int cu[4], cv[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floor4(dot4(wide_.aU, d[0], d[1], d[2])), wide_.halfU));
-        _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floor4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
+        _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floorToInt4(dot4(wide_.aU, d[0], d[1], d[2])), wide_.halfU));
+        _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floorToInt4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
         for (int k = 0; k < n; ++k)
             if (front >> k & 1u && (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k])))
                 addOccluderAt(cu[k], cv[k], v[N_][k], voxel(bit[k]));
@@ -498,16 +493,11 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
     if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(wide_.n, dx, dy, dz), _mm_setzero_ps()));
     const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
     if (!bits) return 0;
-    // floorToInt four at a time: truncate, then step down where that went up.
-    auto floor4 = [](__m128 x) {
-        const __m128i t = _mm_cvttps_epi32(x);
-        return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(x, _mm_cvtepi32_ps(t))));
-    };
     const __m128 u = dot4(wide_.aU, dx, dy, dz), v = dot4(wide_.aV, dx, dy, dz), half = _mm_set1_ps(0.5f);
     _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floor4(_mm_sub_ps(u, half)), wide_.halfU));
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floor4(_mm_sub_ps(v, half)), wide_.halfV));
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.voxelN), floor4(p[N_]));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floorToInt4(_mm_sub_ps(u, half)), wide_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floorToInt4(_mm_sub_ps(v, half)), wide_.halfV));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.voxelN), floorToInt4(p[N_]));
     return bits;
 }
 #endif
@@ -604,11 +594,7 @@ void CylinderTraversal::read4(const SampleEvent* ev, float vis[4]) const {
     for (int k = 0; k < 4; ++k) r[k] = _mm_loadu_ps(reinterpret_cast<const float*>(ev + k));
     _MM_TRANSPOSE4_PS(r[0], r[1], r[2], r[3]);  // the indices, slices, u's and v's
     const __m128 half = _mm_set1_ps(0.5f), x = _mm_sub_ps(r[2], half), y = _mm_sub_ps(r[3], half);
-    auto floor4 = [](__m128 a) {
-        const __m128i t = _mm_cvttps_epi32(a);
-        return _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(a, _mm_cvtepi32_ps(t))));
-    };
-    const __m128i ix = floor4(x), iy = floor4(y);
+    const __m128i ix = floorToInt4(x), iy = floorToInt4(y);
     const __m128 fx = _mm_sub_ps(x, _mm_cvtepi32_ps(ix)), fy = _mm_sub_ps(y, _mm_cvtepi32_ps(iy));
     const __m128i i0 = _mm_add_epi32(ix, _mm_set1_epi32(halfU_)), j0 = _mm_add_epi32(iy, _mm_set1_epi32(halfV_));
     alignas(16) int32_t is[4], js[4];

@@ -270,7 +270,7 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
-    int sliceMin_ = 0, sliceMax_ = -1;  // the sample events' slices
+    int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
     struct Wide {  // reach4's numbers, each in all four lanes, set once a cylinder
