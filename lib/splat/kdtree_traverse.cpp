@@ -49,7 +49,9 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     halfV_ = int(std::ceil(r_[V_] + 1.f + (r_[N_] + 1.f) * std::abs(kV_))) + 2;
     sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
     const size_t cells = size_t(sizeU_) * size_t(sizeV_);
-    if (s_.sweep.size() < cells) s_.sweep.resize(cells), s_.shadowable.resize(cells);
+    if (s_.sweep.size() < cells) s_.sweep.resize(cells);
+    if (s_.shadowable.size() < cells + size_t(sizeU_) + 1) s_.shadowable.resize(cells + size_t(sizeU_) + 1);
+    shadow_ = s_.shadowable.data() + sizeU_ + 1;
     findValidRows();
 #if defined(__SSE2__)
     for (int a = 0; a < 3; ++a) {
@@ -57,6 +59,10 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
         wide_.n[a] = _mm_set1_ps(n_[a]), wide_.aU[a] = _mm_set1_ps(aU_[a]), wide_.aV[a] = _mm_set1_ps(aV_[a]);
     }
     wide_.invVoxel = _mm_set1_ps(invVoxel_), wide_.length = _mm_set1_ps(L_), wide_.kernel2 = _mm_set1_ps(kernel2_);
+    for (int a = 0; a < 3; ++a) {
+        wide_.absW[a] = _mm_set1_ps(absW_[a]), wide_.absN[a] = _mm_set1_ps(absN_[a]);
+        wide_.absAU[a] = _mm_set1_ps(absAU_[a]), wide_.absAV[a] = _mm_set1_ps(absAV_[a]);
+    }
     wide_.halfU = _mm_set1_epi32(halfU_), wide_.halfV = _mm_set1_epi32(halfV_);
 #endif
     s_.occluders.clear();
@@ -245,21 +251,26 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         return tree_.voxels[brick.firstVoxel + uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)))];
     };
 #if defined(__SSE2__)
+    const __m128i corner[3] = {_mm_set1_epi32(e.lo[0]), _mm_set1_epi32(e.lo[1]), _mm_set1_epi32(e.lo[2])};
     // Four candidates at a time: the tangent test and the sure met test in lanes, the same
     // operations in the same order as inFrontOfTangent and surelyMet (so the same answers),
     // the exact met test for the lanes left.
     for (uint64_t bits = candidates; bits;) {
-        alignas(16) int v[3][4];
         int bit[4], n = 0;
-        for (; n < 4 && bits; ++n, bits &= bits - 1) {
-            bit[n] = __builtin_ctzll(bits);
-            v[0][n] = e.lo[0] + (bit[n] & 3), v[1][n] = e.lo[1] + ((bit[n] >> 2) & 3), v[2][n] = e.lo[2] + (bit[n] >> 4);
-        }
-        for (int k = n; k < 4; ++k) v[0][k] = v[0][0], v[1][k] = v[1][0], v[2][k] = v[2][0];
+        for (; n < 4 && bits; ++n, bits &= bits - 1) bit[n] = __builtin_ctzll(bits);
+        for (int k = n; k < 4; ++k) bit[k] = bit[0];
+        // The voxels in lanes, made from the bit numbers in registers (scalar stores read back
+        // as a vector would wait for each other).
+        const __m128i b = _mm_setr_epi32(bit[0], bit[1], bit[2], bit[3]), three = _mm_set1_epi32(3);
+        const __m128i vi[3] = {_mm_add_epi32(corner[0], _mm_and_si128(b, three)),
+                               _mm_add_epi32(corner[1], _mm_and_si128(_mm_srli_epi32(b, 2), three)),
+                               _mm_add_epi32(corner[2], _mm_srli_epi32(b, 4))};
+        alignas(16) int v[3][4];
         __m128 d[3];
-        for (int a = 0; a < 3; ++a)
-            d[a] = _mm_sub_ps(_mm_add_ps(_mm_cvtepi32_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(v[a]))), _mm_set1_ps(0.5f)),
-                              wide_.o[a]);
+        for (int a = 0; a < 3; ++a) {
+            _mm_store_si128(reinterpret_cast<__m128i*>(v[a]), vi[a]);
+            d[a] = _mm_sub_ps(_mm_add_ps(_mm_cvtepi32_ps(vi[a]), _mm_set1_ps(0.5f)), wide_.o[a]);
+        }
         const __m128 along = dot4(wide_.w, d[0], d[1], d[2]);
         const __m128 dd = dot4(d, d[0], d[1], d[2]);
         const __m128 sure = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length)),
@@ -291,24 +302,21 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
 
 // Marks (value 1) or clears (0) the cells (i0, j0) whose 2×2 bilinear block (i0…i0+1,
 // j0…j0+1) holds an occluder's cell: a sample whose block starts at an unmarked cell reads 0 in
-// every slice, so V = 1.
+// every slice, so V = 1. The map has a row and a cell in front (shadow_ is past them), so the
+// four cells are written without tests: for an occluder in column 0, the "cell to the left" is
+// the previous row's last one, a mask edge no reached sample's block starts at (at worst a
+// sample there would be swept, to the same V).
 void CylinderTraversal::markShadowable(uint8_t value) {
     for (const OccluderEvent& ev : s_.occluders) {
-        const int cu = ev.cell % sizeU_, cv = ev.cell / sizeU_;
-        uint8_t* row = &s_.shadowable[size_t(ev.cell)];
-        row[0] = value;
-        if (cu > 0) row[-1] = value;
-        if (cv > 0) {
-            row[-sizeU_] = value;
-            if (cu > 0) row[-sizeU_ - 1] = value;
-        }
+        uint8_t* row = shadow_ + ev.cell;
+        row[0] = row[-1] = row[-sizeU_] = row[-sizeU_ - 1] = value;
     }
 }
 
 // Whether a sample whose bilinear block starts at mask cell (i0, j0) may read an occluder.
 inline bool CylinderTraversal::shadowable(int i0, int j0) const {
     if (unsigned(i0) < unsigned(sizeU_) && unsigned(j0) < unsigned(sizeV_))
-        return s_.shadowable[size_t(i0) + size_t(sizeU_) * size_t(j0)] != 0;
+        return shadow_[size_t(i0) + size_t(sizeU_) * size_t(j0)] != 0;
     // A block at the mask's edge (none is, by the mask's size): cells outside hold nothing.
     for (const OccluderEvent& ev : s_.occluders) {
         const int cu = ev.cell % sizeU_, cv = ev.cell / sizeU_;
@@ -346,6 +354,32 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         return;
     }
     constexpr float kEdge = 1e-3f;  // the octants' faces, widened past the positions' rounding
+#if defined(__SSE2__)
+    // The eight octants' tests in two groups of four lanes (octant k: x + 2, y + 2, z + 2 at
+    // its bits 0, 1, 2), then each octant read or taken as they say.
+    uint32_t may = 0, sure = 0;
+    alignas(16) int32_t rect[2][4][4];
+    for (int group = 0; group < 2; ++group) {
+        const __m128 offset[3] = {_mm_setr_ps(0.f, 2.f, 0.f, 2.f), _mm_setr_ps(0.f, 0.f, 2.f, 2.f), _mm_set1_ps(2.f * float(group))};
+        __m128 partLo[3], partHi[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m128 octant = _mm_add_ps(_mm_set1_ps(corner[a]), offset[a]);
+            partLo[a] = _mm_max_ps(_mm_sub_ps(octant, _mm_set1_ps(kEdge)), _mm_set1_ps(lo[a]));
+            partHi[a] = _mm_min_ps(_mm_add_ps(octant, _mm_set1_ps(2.f + kEdge)), _mm_set1_ps(hi[a]));
+        }
+        uint32_t m, su;
+        boxTests4(partLo, partHi, m, su, rect[group]);
+        may |= m << (4 * group), sure |= su << (4 * group);
+    }
+    for (int k = 0; k < 8; ++k) {
+        const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
+        if (first == last || !(may >> k & 1u)) continue;
+        const int32_t(&r)[4][4] = rect[k >> 2];
+        const int lane = k & 3;
+        if (sure >> k & 1u && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) takeAll(first, last);
+        else gatherSampleRange(met.entry, first, last);
+    }
+#else
     for (int k = 0; k < 8; ++k) {
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
         if (first == last) continue;
@@ -355,20 +389,20 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         if (boxSurelyUnshadowed(partLo, partHi)) takeAll(first, last);
         else gatherSampleRange(met.entry, first, last);
     }
+#endif
 }
 
 // Whether the box [lo, hi] (voxel space) can hold a reached sample: it reaches into the depth
 // range (0, L], within h of the axis, in front of the origin's tangent plane. Each test is
-// widened by kSlack, above the rounding of the per-sample tests, which decide.
+// widened by kBoxReachSlack, above the rounding of the per-sample tests, which decide.
 bool CylinderTraversal::boxMayBeReached(const Vec3& lo, const Vec3& hi) const {
-    constexpr float kSlack = 0.01f;  // voxels
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
     const Vec3 c = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
     const Vec3 d = c - o_;
-    const float along = glm::dot(d, w_), spread = glm::dot(absW_, half) + kSlack;
+    const float along = glm::dot(d, w_), spread = glm::dot(absW_, half) + kBoxReachSlack;
     if (along + spread <= 0.f || along - spread > L_) return false;
-    if (hasNormal_ && glm::dot(d, n_) + glm::dot(absN_, half) + kSlack <= 0.f) return false;
-    const float reach = radius_ + glm::length(half) + kSlack;
+    if (hasNormal_ && glm::dot(d, n_) + glm::dot(absN_, half) + kBoxReachSlack <= 0.f) return false;
+    const float reach = radius_ + glm::length(half) + kBoxReachSlack;
     return glm::dot(d, d) - along * along < reach * reach;
 }
 
@@ -396,14 +430,65 @@ bool CylinderTraversal::boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) cons
     const float v = glm::dot(d, aV_), dv = glm::dot(absAV_, half) + slack;
     const int i0 = floorToInt(u - du - 0.5f) + halfU_, i1 = floorToInt(u + du - 0.5f) + halfU_;
     const int j0 = floorToInt(v - dv - 0.5f) + halfV_, j1 = floorToInt(v + dv - 0.5f) + halfV_;
+    return rectUnshadowed(i0, i1, j0, j1);
+}
+
+// Whether no cell of the mask rectangle [i0, i1] × [j0, j1] is marked shadowable (false when the
+// rectangle leaves the mask).
+bool CylinderTraversal::rectUnshadowed(int i0, int i1, int j0, int j1) const {
     if (i0 < 0 || j0 < 0 || i1 >= sizeU_ || j1 >= sizeV_) return false;
     for (int j = j0; j <= j1; ++j) {
-        const uint8_t* row = &s_.shadowable[size_t(sizeU_) * size_t(j)];
+        const uint8_t* row = shadow_ + size_t(sizeU_) * size_t(j);
         for (int i = i0; i <= i1; ++i)
             if (row[i]) return false;
     }
     return true;
 }
+
+#if defined(__SSE2__)
+// boxMayBeReached and boxSurelyUnshadowed for four boxes, lane by lane the same operations in
+// the same order (so the same answers): bit k of `may` and `sure` for box k, and the mask
+// rectangle (i0, i1, j0, j1) that box k's sure test still has to read (rectUnshadowed).
+void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32_t& may, uint32_t& sure,
+                                  int32_t rect[4][4]) const {
+    const __m128 halfOf = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    __m128 d[3], half[3], valid = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    for (int a = 0; a < 3; ++a) {
+        valid = _mm_and_ps(valid, _mm_cmple_ps(lo[a], hi[a]));
+        d[a] = _mm_sub_ps(_mm_mul_ps(halfOf, _mm_add_ps(lo[a], hi[a])), wide_.o[a]);
+        half[a] = _mm_mul_ps(halfOf, _mm_sub_ps(hi[a], lo[a]));
+    }
+    const __m128 along = dot4(wide_.w, d[0], d[1], d[2]), spreadW = dot4(wide_.absW, half[0], half[1], half[2]);
+    const __m128 spreadN = dot4(wide_.absN, half[0], half[1], half[2]), dn = dot4(wide_.n, d[0], d[1], d[2]);
+    const __m128 halfLength = _mm_sqrt_ps(dot4(half, half[0], half[1], half[2]));
+    const __m128 off2 = _mm_sub_ps(dot4(d, d[0], d[1], d[2]), _mm_mul_ps(along, along));
+    // boxMayBeReached.
+    const __m128 slackM = _mm_set1_ps(kBoxReachSlack), spreadM = _mm_add_ps(spreadW, slackM);
+    __m128 m = _mm_and_ps(valid, _mm_and_ps(_mm_cmpnle_ps(_mm_add_ps(along, spreadM), zero),
+                                            _mm_cmpngt_ps(_mm_sub_ps(along, spreadM), wide_.length)));
+    if (hasNormal_) m = _mm_and_ps(m, _mm_cmpnle_ps(_mm_add_ps(_mm_add_ps(dn, spreadN), slackM), zero));
+    const __m128 reach = _mm_add_ps(_mm_add_ps(_mm_set1_ps(radius_), halfLength), slackM);
+    m = _mm_and_ps(m, _mm_cmplt_ps(off2, _mm_mul_ps(reach, reach)));
+    may = uint32_t(_mm_movemask_ps(m));
+    // boxSurelyUnshadowed, up to its reading of the map.
+    const __m128 size = _mm_add_ps(_mm_add_ps(_mm_sqrt_ps(dot4(d, d[0], d[1], d[2])), halfLength), _mm_set1_ps(1.f));
+    const __m128 slack = _mm_add_ps(_mm_set1_ps(0.01f), _mm_mul_ps(_mm_set1_ps(1e-5f), size));
+    const __m128 slack2 = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(4e-5f), size), size);
+    __m128 s = _mm_and_ps(valid, _mm_and_ps(_mm_cmpgt_ps(_mm_sub_ps(along, spreadW), slack),
+                                            _mm_cmple_ps(_mm_add_ps(along, spreadW), _mm_sub_ps(wide_.length, slack))));
+    if (hasNormal_) s = _mm_and_ps(s, _mm_cmpgt_ps(_mm_sub_ps(dn, spreadN), slack));
+    const __m128 farthest = _mm_add_ps(_mm_add_ps(_mm_sqrt_ps(_mm_add_ps(_mm_max_ps(off2, zero), slack2)), halfLength), slack);
+    s = _mm_and_ps(s, _mm_cmplt_ps(_mm_add_ps(_mm_mul_ps(farthest, farthest), slack2), wide_.kernel2));
+    sure = uint32_t(_mm_movemask_ps(s)) & may;
+    if (!sure) return;
+    const __m128 u = dot4(wide_.aU, d[0], d[1], d[2]), du = _mm_add_ps(dot4(wide_.absAU, half[0], half[1], half[2]), slack);
+    const __m128 v = dot4(wide_.aV, d[0], d[1], d[2]), dv = _mm_add_ps(dot4(wide_.absAV, half[0], half[1], half[2]), slack);
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[0]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(u, du), halfOf)), wide_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[1]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(u, du), halfOf)), wide_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[2]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(v, dv), halfOf)), wide_.halfV));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[3]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(v, dv), halfOf)), wide_.halfV));
+}
+#endif
 
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
 // projection (u, v) gives its bilinear block; those no occluder can shadow go to the brick's

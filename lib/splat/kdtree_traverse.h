@@ -105,6 +105,7 @@ struct TraversalStats {
 constexpr int kMaxAmbiguousOffset = 4;    // N slices
 constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
 constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
+constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested that much wider
 
 namespace kd_detail {
 
@@ -176,7 +177,7 @@ class TraversalScratch {
 public:
     std::vector<kd_detail::StackEntry> stack;
     std::vector<float> sweep;
-    std::vector<uint8_t> shadowable;  // per mask cell: one of the 2×2 cells from it on holds an occluder
+    std::vector<uint8_t> shadowable;  // per mask cell (a row and a cell in front): one of the 2×2 cells from it on holds an occluder
     std::vector<kd_detail::MetBrick> bricks;  // the met bricks that hold samples, in kd order
     EventVector<kd_detail::OccluderEvent> occluders, occludersSorted;
     EventVector<kd_detail::SampleEvent> samples, samplesSorted;
@@ -250,6 +251,10 @@ private:
     uint32_t reach4(const Vec3* world, Reach4& r) const;
     bool boxMayBeReached(const Vec3& lo, const Vec3& hi) const;
     bool boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) const;
+    bool rectUnshadowed(int i0, int i1, int j0, int j1) const;
+#if defined(__SSE2__)
+    void boxTests4(const __m128 lo[3], const __m128 hi[3], uint32_t& may, uint32_t& sure, int32_t rect[4][4]) const;
+#endif
     bool shadowable(int i0, int j0) const;
 
     // Sweep.
@@ -270,11 +275,12 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
+    uint8_t* shadow_;  // the shadowable map's cell (0, 0)
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
     struct Wide {  // reach4's numbers, each in all four lanes, set once a cylinder
-        __m128 gridOrigin[3], o[3], w[3], n[3], aU[3], aV[3], invVoxel, length, kernel2;
+        __m128 gridOrigin[3], o[3], w[3], n[3], aU[3], aV[3], absW[3], absN[3], absAU[3], absAV[3], invVoxel, length, kernel2;
         __m128i halfU, halfV;
     } wide_;
 #endif
