@@ -284,9 +284,13 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         alignas(16) int cu[4], cv[4];
         _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floorToInt4(dot4(wide_.aU, d[0], d[1], d[2])), wide_.halfU));
         _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floorToInt4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
-        for (int k = 0; k < n; ++k)
-            if (front >> k & 1u && (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k])))
-                addOccluderAt(cu[k], cv[k], v[N_][k], voxel(bit[k]));
+        for (int k = 0; k < n; ++k) {
+            if (!(front >> k & 1u)) continue;
+            // A voxel of an invalid cell is no occluder (no sample reads the cell): skipped
+            // before the exact met test. One outside the mask is left to addOccluderAt to count.
+            if (unsigned(cu[k]) < unsigned(sizeU_) && unsigned(cv[k]) < unsigned(sizeV_) && !validMaskCell(cu[k], cv[k])) continue;
+            if (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k])) addOccluderAt(cu[k], cv[k], v[N_][k], voxel(bit[k]));
+        }
     }
 #else
     for (uint64_t bits = candidates; bits; bits &= bits - 1) {
@@ -624,6 +628,8 @@ void CylinderTraversal::addOccluderAt(int cu, int cv, int layer, VoxelOcclusion 
         ++st_.maskOverflow;
         return;
     }
+    if (!validMaskCell(cu, cv)) return;  // no sample reads an invalid cell
+    if (!validMaskCell(cu, cv)) return;  // no sample reads an invalid cell
     const int cell = cu + sizeU_ * cv;
     s_.occluders.push_back({cell, slice, occ});
     ++s_.occluderSlices[size_t(slice)];
