@@ -342,19 +342,33 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     brick.sampleBounds(corner, lo, hi);
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
-    s_.unshadowed.clear();
+    // Room for all the brick's samples in both lists, made once; each part writes at the
+    // lists' ends (n, listed) and the lists are cut to them at the end.
+    size_t n = s_.samples.size(), listed = 0;
+    s_.samples.resize(n + brick.sampleCount);
+    s_.unshadowed.resize(brick.sampleCount);
     auto takeAll = [&](uint32_t first, uint32_t last) {
-        const size_t at = s_.unshadowed.size();
-        s_.unshadowed.resize(at + (last - first));
-        std::iota(s_.unshadowed.begin() + std::ptrdiff_t(at), s_.unshadowed.end(), first);
+        std::iota(s_.unshadowed.begin() + std::ptrdiff_t(listed), s_.unshadowed.begin() + std::ptrdiff_t(listed + (last - first)), first);
+        listed += last - first;
         st_.samplesReached += last - first, st_.samplesBoxed += last - first;
     };
+    gatherOctants(met, lo, hi, takeAll, n, listed);
+    s_.samples.resize(n);
+    s_.unshadowed.resize(listed);
+}
+
+// gatherBrickSamples' tests of the whole box and of its octants.
+template <class TakeAll>
+void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const Vec3& hi, TakeAll& takeAll, size_t& n,
+                                      size_t& listed) {
+    const Brick& brick = tree_.bricks[met.brick];
+    const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
     if (boxSurelyUnshadowed(lo, hi)) {
         takeAll(brick.firstSample, brick.firstSample + brick.sampleCount);
         return;
     }
     if (!brick.divided()) {
-        gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount);
+        gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount, n, listed);
         return;
     }
     constexpr float kEdge = 1e-3f;  // the octants' faces, widened past the positions' rounding
@@ -381,7 +395,7 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         const int32_t(&r)[4][4] = rect[k >> 2];
         const int lane = k & 3;
         if (sure >> k & 1u && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) takeAll(first, last);
-        else gatherSampleRange(met.entry, first, last);
+        else gatherSampleRange(met.entry, first, last, n, listed);
     }
 #else
     for (int k = 0; k < 8; ++k) {
@@ -391,7 +405,7 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
         const Vec3 partLo = glm::max(lo, octant - kEdge), partHi = glm::min(hi, octant + (2.f + kEdge));
         if (!boxMayBeReached(partLo, partHi)) continue;
         if (boxSurelyUnshadowed(partLo, partHi)) takeAll(first, last);
-        else gatherSampleRange(met.entry, first, last);
+        else gatherSampleRange(met.entry, first, last, n, listed);
     }
 #endif
 }
@@ -499,12 +513,11 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
 // unshadowed list, the others become sample events, their voxel (clamped to the brick, where
 // the tree put it) giving their slice. Four samples at a time where SSE is there (the same
 // operations in the same order as the scalar reach(), so the same answers).
-void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last) {
-    // The events are written field by field into room made first: a pushed temporary would be
-    // built on the stack and reloaded whole, a store-forwarding stall per sample.
-    size_t n = s_.samples.size(), free = s_.unshadowed.size();
-    s_.samples.resize(n + (last - first));
-    s_.unshadowed.resize(free + (last - first));
+void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, size_t& events, size_t& listed) {
+    // The events are written field by field into the room made by the caller: a pushed
+    // temporary would be built on the stack and reloaded whole, a store-forwarding stall per
+    // sample.
+    size_t n = events, free = listed;
     const int layerLo = e.lo[N_], layerHi = int(e.hi[N_]) - 1;
     int sliceMin = sliceMin_, sliceMax = sliceMax_;  // kept in registers, not written through `this`
     auto add = [&](uint32_t i, const Reach& r) {
@@ -539,8 +552,7 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
     sliceMin_ = sliceMin, sliceMax_ = sliceMax;
     st_.samplesReached += n + free - before;
     st_.samplesTested += last - first;
-    s_.samples.resize(n);
-    s_.unshadowed.resize(free);
+    events = n, listed = free;
 }
 
 // A sample at world position y is reached: at p = its voxel-space position, depth in (0, L],
