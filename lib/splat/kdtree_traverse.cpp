@@ -188,21 +188,6 @@ static void prefetchSamples(const std::vector<T>& v, const Brick& brick) {
         __builtin_prefetch(q);
 }
 
-// The bits of a brick (whose min corner is e.lo) inside voxel ranges [i0, i1).
-static uint64_t brickRangeMask(const StackEntry& e, const int i0[3], const int i1[3]) {
-    auto axisBits = [](int from, int to) { return to <= from ? 0u : ((1u << to) - 1u) & ~((1u << from) - 1u); };
-    uint64_t mask = 0;
-    const unsigned xs = axisBits(i0[0] - e.lo[0], i1[0] - e.lo[0]);
-    const unsigned ys = axisBits(i0[1] - e.lo[1], i1[1] - e.lo[1]);
-    const unsigned zs = axisBits(i0[2] - e.lo[2], i1[2] - e.lo[2]);
-    for (int z = 0; z < kBrickSize; ++z) {
-        if (!(zs >> z & 1u)) continue;
-        for (int y = 0; y < kBrickSize; ++y)
-            if (ys >> y & 1u) mask |= uint64_t(xs) << (kBrickSize * (y + kBrickSize * z));
-    }
-    return mask;
-}
-
 // Whether every voxel of `bits` (a brick's, min corner e.lo) lies behind the origin's tangent
 // plane as inFrontOfTangent decides it, (centre − o)·n ≤ ½‖n‖₁: the box of their centres does, with
 // a margin above the rounding, so that no voxel the per-voxel test would keep is skipped.
@@ -238,11 +223,8 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
             s_.bricks.push_back({e, index});
         }
     }
-    int i0[3], i1[3];
-    metRange(e, i0, i1);
     // Only voxels with counts on a side ω sees can occlude (the others would add 0).
-    const uint64_t occluding = brick.sides[side_[0]] | brick.sides[side_[1]] | brick.sides[side_[2]];
-    const uint64_t candidates = occluding & brickRangeMask(e, i0, i1);
+    const uint64_t candidates = brick.sides[side_[0]] | brick.sides[side_[1]] | brick.sides[side_[2]];
     // Most candidates lie on the surface the photon leaves, behind its tangent plane (85 % at
     // the paper's settings): all of a brick's at once when their box is, else one by one,
     // before the costlier met test.
