@@ -348,7 +348,7 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
     const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
     if (!brick.divided()) {
         if (boxSurelyUnshadowed(lo, hi)) takeAll(brick.firstSample, brick.firstSample + brick.sampleCount);
-        else gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount, n, listed);
+        else gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount, false, n, listed);
         return;
     }
     constexpr float kEdge = 1e-3f;  // the octants' faces, widened past the positions' rounding
@@ -375,7 +375,7 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         const int32_t(&r)[4][4] = rect[k >> 2];
         const int lane = k & 3;
         if (sure >> k & 1u && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) takeAll(first, last);
-        else gatherSampleRange(met.entry, first, last, n, listed);
+        else gatherSampleRange(met.entry, first, last, sure >> k & 1u, n, listed);
     }
 #else
     for (int k = 0; k < 8; ++k) {
@@ -385,7 +385,7 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         const Vec3 partLo = glm::max(lo, octant - kEdge), partHi = glm::min(hi, octant + (2.f + kEdge));
         if (!boxMayBeReached(partLo, partHi)) continue;
         if (boxSurelyUnshadowed(partLo, partHi)) takeAll(first, last);
-        else gatherSampleRange(met.entry, first, last, n, listed);
+        else gatherSampleRange(met.entry, first, last, false, n, listed);
     }
 #endif
 }
@@ -493,7 +493,8 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
 // unshadowed list, the others become sample events, their voxel (clamped to the brick, where
 // the tree put it) giving their slice. Four samples at a time where SSE is there (the same
 // operations in the same order as the scalar reach(), so the same answers).
-void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, size_t& events, size_t& listed) {
+void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached,
+                                          size_t& events, size_t& listed) {
     // The events are written field by field into the room made by the caller: a pushed
     // temporary would be built on the stack and reloaded whole, a store-forwarding stall per
     // sample.
@@ -517,13 +518,17 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
     const size_t before = n + free;
     uint32_t i = first;
 #if defined(__SSE2__)
-    for (; i + 4 <= last; i += 4) {
-        Reach4 r;
-        for (uint32_t bits = reach4(&eye_.position[i], r); bits; bits &= bits - 1) {
-            const int k = __builtin_ctz(bits);
-            add(i + uint32_t(k), Reach{r.u[k], r.v[k], r.i0[k], r.j0[k], r.voxelN[k]});
+    auto fours = [&](auto test) {
+        for (; i + 4 <= last; i += 4) {
+            Reach4 r;
+            for (uint32_t bits = reach4<decltype(test)::value>(&eye_.position[i], r); bits; bits &= bits - 1) {
+                const int k = __builtin_ctz(bits);
+                add(i + uint32_t(k), Reach{r.u[k], r.v[k], r.i0[k], r.j0[k], r.voxelN[k]});
+            }
         }
-    }
+    };
+    if (surelyReached) fours(std::false_type{});
+    else fours(std::true_type{});
 #endif
     for (; i < last; ++i) {
         Reach r;
@@ -553,7 +558,9 @@ inline bool CylinderTraversal::reach(const Vec3& y, Reach& r) const {
 
 #if defined(__SSE2__)
 // reach() for the four samples at `world` (consecutive), bit k for sample k. Each comparison is
-// the negation reach() rejects by, so a NaN goes the same way.
+// the negation reach() rejects by, so a NaN goes the same way. Without kTest (samples of a box
+// boxSurelyReached passed) only the projection is made and every lane is reached.
+template <bool kTest>
 uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
     // Four packed xyz triples to x, y, z lanes.
     const float* f = &world[0].x;
@@ -567,13 +574,16 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
                          _mm_mul_ps(_mm_sub_ps(wy, wide_.gridOrigin[1]), wide_.invVoxel),
                          _mm_mul_ps(_mm_sub_ps(wz, wide_.gridOrigin[2]), wide_.invVoxel)};
     const __m128 dx = _mm_sub_ps(p[0], wide_.o[0]), dy = _mm_sub_ps(p[1], wide_.o[1]), dz = _mm_sub_ps(p[2], wide_.o[2]);
-    const __m128 along = dot4(wide_.w, dx, dy, dz);
-    const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), wide_.kernel2));
-    if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(wide_.n, dx, dy, dz), _mm_setzero_ps()));
-    const uint32_t bits = uint32_t(_mm_movemask_ps(ok));
-    if (!bits) return 0;
+    uint32_t bits = 15u;
+    if constexpr (kTest) {
+        const __m128 along = dot4(wide_.w, dx, dy, dz);
+        const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+        __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length));
+        ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), wide_.kernel2));
+        if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(wide_.n, dx, dy, dz), _mm_setzero_ps()));
+        bits = uint32_t(_mm_movemask_ps(ok));
+        if (!bits) return 0;
+    }
     const __m128 u = dot4(wide_.aU, dx, dy, dz), v = dot4(wide_.aV, dx, dy, dz), half = _mm_set1_ps(0.5f);
     _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
     _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floorToInt4(_mm_sub_ps(u, half)), wide_.halfU));

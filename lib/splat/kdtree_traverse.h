@@ -250,8 +250,9 @@ private:
     };
     template <class TakeAll>
     void gatherOctants(const kd_detail::MetBrick& met, const Vec3& lo, const Vec3& hi, TakeAll& takeAll, size_t& n, size_t& listed);
-    void gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, size_t& events, size_t& listed);
+    void gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached, size_t& events, size_t& listed);
     bool reach(const Vec3& world, Reach& r) const;
+    template <bool kTest>
     uint32_t reach4(const Vec3* world, Reach4& r) const;
     bool boxMayBeReached(const Vec3& lo, const Vec3& hi) const;
     bool boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) const;
