@@ -559,7 +559,7 @@ inline bool CylinderTraversal::reach(const Vec3& y, Reach& r) const {
 #if defined(__SSE2__)
 // reach() for the four samples at `world` (consecutive), bit k for sample k. Each comparison is
 // the negation reach() rejects by, so a NaN goes the same way. Without kTest (samples of a box
-// boxSurelyReached passed) only the projection is made and every lane is reached.
+// whose every point boxTests4 found reached) only the projection is made, every lane reached.
 template <bool kTest>
 uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
     // Four packed xyz triples to x, y, z lanes.
