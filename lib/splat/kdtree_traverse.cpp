@@ -268,9 +268,7 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floorToInt4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
         for (int k = 0; k < n; ++k) {
             if (!(front >> k & 1u)) continue;
-            // A voxel of an invalid cell is no occluder (no sample reads the cell): skipped
-            // before the exact met test. One outside the mask is left to addOccluderAt to count.
-            if (unsigned(cu[k]) < unsigned(sizeU_) && unsigned(cv[k]) < unsigned(sizeV_) && !validMaskCell(cu[k], cv[k])) continue;
+            if (invalidCell(cu[k], cv[k])) continue;  // before the exact met test
             if (met >> k & 1u || voxelMet(v[0][k], v[1][k], v[2][k])) addOccluderAt(cu[k], cv[k], v[N_][k], voxel(bit[k]));
         }
     }
@@ -616,10 +614,12 @@ void CylinderTraversal::addOccluder(int ix, int iy, int iz, VoxelOcclusion voxel
     // (c_U − o_U) − k_U (c_N − o_N), the other terms being exact zeros and ones.
     const Vec3 d = Vec3(float(ix) + 0.5f, float(iy) + 0.5f, float(iz) + 0.5f) - o_;
     const int v[3] = {ix, iy, iz};
-    addOccluderAt(floorToInt(glm::dot(d, aU_)) + halfU_, floorToInt(glm::dot(d, aV_)) + halfV_, v[N_], voxel);
+    const int cu = floorToInt(glm::dot(d, aU_)) + halfU_, cv = floorToInt(glm::dot(d, aV_)) + halfV_;
+    if (!invalidCell(cu, cv)) addOccluderAt(cu, cv, v[N_], voxel);
 }
 
-// The occluder of voxel layer `layer` along N, its centre projecting into mask cell (cu, cv).
+// The occluder of voxel layer `layer` along N, its centre projecting into mask cell (cu, cv),
+// which invalidCell has let through.
 void CylinderTraversal::addOccluderAt(int cu, int cv, int layer, VoxelOcclusion voxel) {
     float occ = 0.f;
     for (int a = 0; a < 3; ++a) occ += occWeight_[a] * float(voxel.count(side_[a]));
@@ -630,8 +630,6 @@ void CylinderTraversal::addOccluderAt(int cu, int cv, int layer, VoxelOcclusion 
         ++st_.maskOverflow;
         return;
     }
-    if (!validMaskCell(cu, cv)) return;  // no sample reads an invalid cell
-    if (!validMaskCell(cu, cv)) return;  // no sample reads an invalid cell
     const int cell = cu + sizeU_ * cv;
     s_.occluders.push_back({cell, slice, occ});
     ++s_.occluderSlices[size_t(slice)];

@@ -219,6 +219,11 @@ private:
     void findValidRows();
     bool validCell(int i, int j) const;  // relative to the mask centre
     bool validMaskCell(int i, int j) const { return i >= s_.rows[size_t(j)].lo && i <= s_.rows[size_t(j)].hi; }
+    // A cell of the mask that is not valid: no sample reads it, so a voxel projecting there is no
+    // occluder. (One outside the mask is left to addOccluderAt, which counts it.)
+    bool invalidCell(int cu, int cv) const {
+        return unsigned(cu) < unsigned(sizeU_) && unsigned(cv) < unsigned(sizeV_) && !validMaskCell(cu, cv);
+    }
     int sliceOf(int vN) const { return forward_ ? vN : dimN_ - 1 - vN; }
 
     // Gathering.
