@@ -529,6 +529,60 @@ TEST(OcclusionTreeTraversal, BoxesTakenWholeMatchBruteForceOnSurfaces) {
                 size_t(stats.samplesBoxed), total.partial);
 }
 
+// The sixteen-lane sample step (CPUs with AVX-512) against the four-lane one: the same visits,
+// in the same order, with the same V to the bit, on random grids (random points, ranges of every
+// length) and on surfaces leaving and meeting walls. The brute-force tests above check
+// whichever path this CPU takes.
+TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
+    if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
+    std::mt19937 rng(91);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    ThreadPool pool(2);
+    TraversalScratch scratch;
+    size_t visits = 0, partial = 0;
+    for (int scene = 0; scene < 4; ++scene) {
+        const IVec3 dims(40, 36, 44);
+        OcclusionGrid grid = randomGrid(rng, dims, scene < 2 ? 0.05f : 0.004f);
+        std::vector<Vec3> points = randomPoints(rng, dims, 12000);
+        for (int i = 0; i < 12000; ++i) {  // a floor and a wall, as surfaces give them
+            const float a = u01(rng), b = u01(rng);
+            points.push_back(i % 2 ? Vec3(a * dims.x, 3.37f, b * dims.z) : Vec3(30.61f, a * dims.y, b * dims.z));
+        }
+        EyeSamples samples = makeSamples(grid.geometry, points);
+        OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+        for (int c = 0; c < 60; ++c) {
+            Cylinder cyl;
+            cyl.dir = randomDirection(rng);
+            if (c % 3 == 0) {  // leaving the floor
+                cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
+                cyl.originNormal = Vec3(0.f, 1.f, 0.f);
+                if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
+            } else {
+                cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
+            }
+            cyl.radius = 0.5f + u01(rng) * (c % 2 ? 10.f : 3.f);
+            cyl.length = u01(rng) * 60.f;
+            std::vector<std::pair<uint32_t, float>> seen[2];
+            for (int wide = 0; wide < 2; ++wide) {
+                ASSERT_TRUE(setTraversalWide(wide == 1));
+                traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { seen[wide].push_back({i, v}); });
+            }
+            ASSERT_EQ(seen[0].size(), seen[1].size()) << "scene " << scene << " cylinder " << c;
+            for (size_t k = 0; k < seen[0].size(); ++k) {
+                ASSERT_EQ(seen[0][k].first, seen[1][k].first) << "scene " << scene << " cylinder " << c << " visit " << k;
+                ASSERT_EQ(std::memcmp(&seen[0][k].second, &seen[1][k].second, sizeof(float)), 0)
+                    << "scene " << scene << " cylinder " << c << " sample " << seen[0][k].first;
+                partial += seen[0][k].second < 1.f;
+            }
+            visits += seen[0].size();
+        }
+    }
+    setTraversalWide(true);
+    EXPECT_GT(visits, 20000u);  // not vacuous
+    EXPECT_GT(partial, 1000u);
+    std::printf("  %zu visits (%zu partly occluded) the same on both paths\n", visits, partial);
+}
+
 namespace {
 
 // A 32³ grid, a wall z = 16 whose surfaces face +z (the back seen by light going +z), eye

@@ -40,6 +40,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
                             ? kMaxAmbiguousOffset
                             : std::min(kMaxAmbiguousOffset, std::max(1, int(std::ceil(std::abs(w_[N_]) / wa))));
     }
+    wideSamples_ = traversalWide();
     hasNormal_ = n_.x != 0.f || n_.y != 0.f || n_.z != 0.f;
     tangentOffset_ = 0.5f * (std::abs(n_.x) + std::abs(n_.y) + std::abs(n_.z));
 
@@ -50,7 +51,8 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
     const size_t cells = size_t(sizeU_) * size_t(sizeV_);
     if (s_.sweep.size() < cells) s_.sweep.resize(cells);
-    if (s_.shadowable.size() < cells + size_t(sizeU_) + 1) s_.shadowable.resize(cells + size_t(sizeU_) + 1);
+    // A row and a cell in front; three bytes past the end for the wide path's four-byte reads.
+    if (s_.shadowable.size() < cells + size_t(sizeU_) + 4) s_.shadowable.resize(cells + size_t(sizeU_) + 4);
     shadow_ = s_.shadowable.data() + sizeU_ + 1;
     findValidRows();
 #if defined(__SSE2__)
@@ -323,10 +325,11 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     brick.sampleBounds(corner, lo, hi);
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
-    // Room for all the brick's samples in both lists, made once; each part writes at the
-    // lists' ends (n, listed) and the lists are cut to them at the end.
+    // Room for all the brick's samples in both lists (and kEventSlack events more, for the wide
+    // path's whole-vector stores), made once; each part writes at the lists' ends (n, listed)
+    // and the lists are cut to them at the end.
     size_t n = s_.samples.size(), listed = 0;
-    s_.samples.resize(n + brick.sampleCount);
+    s_.samples.resize(n + brick.sampleCount + kEventSlack);
     s_.unshadowed.resize(brick.sampleCount);
     auto takeAll = [&](uint32_t first, uint32_t last) {
         std::iota(s_.unshadowed.begin() + std::ptrdiff_t(listed), s_.unshadowed.begin() + std::ptrdiff_t(listed + (last - first)), first);
@@ -489,31 +492,20 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
 // Reached samples: inside the cylinder, in front of the origin's tangent plane. Each one's
 // projection (u, v) gives its bilinear block; those no occluder can shadow go to the brick's
 // unshadowed list, the others become sample events, their voxel (clamped to the brick, where
-// the tree put it) giving their slice. Four samples at a time where SSE is there (the same
-// operations in the same order as the scalar reach(), so the same answers).
+// the tree put it) giving their slice. Sixteen samples at a time where the CPU has AVX-512,
+// else four where SSE is there (the same operations in the same order as the scalar reach(),
+// so the same answers).
 void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached,
                                           size_t& events, size_t& listed) {
+#if RS_TRAVERSE_AVX512
+    if (wideSamples_) return gatherSampleRange16(e, first, last, surelyReached, events, listed);
+#endif
     // The events are written field by field into the room made by the caller: a pushed
     // temporary would be built on the stack and reloaded whole, a store-forwarding stall per
     // sample.
     size_t n = events, free = listed;
     const int layerLo = e.lo[N_], layerHi = int(e.hi[N_]) - 1;
     int sliceMin = sliceMin_, sliceMax = sliceMax_;  // kept in registers, not written through `this`
-    auto add = [&](uint32_t i, const Reach& r) {
-        if (!shadowable(r.i0, r.j0)) {
-            s_.unshadowed[free++] = i;
-            return;
-        }
-        SampleEvent& ev = s_.samples[n++];
-        ev.index = i;
-        const int slice = sliceOf(std::clamp(r.voxelN, layerLo, layerHi));
-        ev.slice = slice;
-        ++s_.sampleSlices[size_t(slice)];
-        sliceMin = std::min(sliceMin, slice), sliceMax = std::max(sliceMax, slice);
-        ev.u = r.u;
-        ev.v = r.v;
-    };
-    const size_t before = n + free;
     uint32_t i = first;
 #if defined(__SSE2__)
     auto fours = [&](auto test) {
@@ -521,21 +513,47 @@ void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, u
             Reach4 r;
             for (uint32_t bits = reach4<decltype(test)::value>(&eye_.position[i], r); bits; bits &= bits - 1) {
                 const int k = __builtin_ctz(bits);
-                add(i + uint32_t(k), Reach{r.u[k], r.v[k], r.i0[k], r.j0[k], r.voxelN[k]});
+                addReached(i + uint32_t(k), Reach{r.u[k], r.v[k], r.i0[k], r.j0[k], r.voxelN[k]}, layerLo, layerHi, n, free,
+                           sliceMin, sliceMax);
             }
         }
     };
     if (surelyReached) fours(std::false_type{});
     else fours(std::true_type{});
 #endif
-    for (; i < last; ++i) {
-        Reach r;
-        if (reach(eye_.position[i], r)) add(i, r);
-    }
+    gatherSampleScalar(e, i, last, n, free, sliceMin, sliceMax);
     sliceMin_ = sliceMin, sliceMax_ = sliceMax;
-    st_.samplesReached += n + free - before;
+    st_.samplesReached += n + free - events - listed;
     st_.samplesTested += last - first;
     events = n, listed = free;
+}
+
+// The samples [first, last) one by one (reach(), then addReached).
+void CylinderTraversal::gatherSampleScalar(const StackEntry& e, uint32_t first, uint32_t last, size_t& events,
+                                           size_t& listed, int& sliceMin, int& sliceMax) {
+    const int layerLo = e.lo[N_], layerHi = int(e.hi[N_]) - 1;
+    for (uint32_t i = first; i < last; ++i) {
+        Reach r;
+        if (reach(eye_.position[i], r)) addReached(i, r, layerLo, layerHi, events, listed, sliceMin, sliceMax);
+    }
+}
+
+// A reached sample no occluder can shadow goes to the unshadowed list, another becomes an event
+// in its slice (its voxel layer clamped to the brick's, where the tree put it).
+inline void CylinderTraversal::addReached(uint32_t i, const Reach& r, int layerLo, int layerHi, size_t& events,
+                                          size_t& listed, int& sliceMin, int& sliceMax) {
+    if (!shadowable(r.i0, r.j0)) {
+        s_.unshadowed[listed++] = i;
+        return;
+    }
+    SampleEvent& ev = s_.samples[events++];
+    ev.index = i;
+    const int slice = sliceOf(std::clamp(r.voxelN, layerLo, layerHi));
+    ev.slice = slice;
+    ++s_.sampleSlices[size_t(slice)];
+    sliceMin = std::min(sliceMin, slice), sliceMax = std::max(sliceMax, slice);
+    ev.u = r.u;
+    ev.v = r.v;
 }
 
 // A sample at world position y is reached: at p = its voxel-space position, depth in (0, L],

@@ -81,7 +81,20 @@
 #include "splat/eye.h"
 #include "splat/kdtree.h"
 
+// The sample step has a sixteen-lane AVX-512 path, chosen at run time (kdtree_traverse_avx512.cpp).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define RS_TRAVERSE_AVX512 1
+#else
+#define RS_TRAVERSE_AVX512 0
+#endif
+
 namespace rs {
+
+// Whether traversals use the sixteen-lane sample step: where the CPU has AVX-512 and the
+// environment does not say RAYSPLAT_SIMD=sse2. Both paths give the same answers, bit for bit;
+// setTraversalWide chooses (false when asked for a path the CPU lacks).
+bool traversalWide();
+bool setTraversalWide(bool on);
 
 struct Cylinder {
     Vec3 origin{0.f};        // o, voxel space
@@ -108,6 +121,7 @@ constexpr int kMaxAmbiguousOffset = 4;    // N slices
 constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
 constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
 constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested that much wider
+constexpr size_t kEventSlack = 16;         // sample events: room past the last, for sixteen-lane stores
 
 namespace kd_detail {
 
@@ -256,6 +270,13 @@ private:
     template <class TakeAll>
     void gatherOctants(const kd_detail::MetBrick& met, const Vec3& lo, const Vec3& hi, TakeAll& takeAll, size_t& n, size_t& listed);
     void gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached, size_t& events, size_t& listed);
+#if RS_TRAVERSE_AVX512
+    void gatherSampleRange16(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached, size_t& events, size_t& listed);
+#endif
+    void gatherSampleScalar(const StackEntry& e, uint32_t first, uint32_t last, size_t& events, size_t& listed, int& sliceMin,
+                            int& sliceMax);
+    void addReached(uint32_t i, const Reach& r, int layerLo, int layerHi, size_t& events, size_t& listed, int& sliceMin,
+                    int& sliceMax);
     bool reach(const Vec3& world, Reach& r) const;
     template <bool kTest>
     uint32_t reach4(const Vec3* world, Reach4& r) const;
@@ -285,6 +306,7 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
+    bool wideSamples_;  // traversalWide(), read once a cylinder
     uint8_t* shadow_;  // the shadowable map's cell (0, 0)
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'

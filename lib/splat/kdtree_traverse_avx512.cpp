@@ -1,0 +1,195 @@
+// The traversal's sample step sixteen samples at a time, on CPUs with AVX-512 (chosen at run
+// time: the build assumes only x86-64's SSE2). Each lane makes the same operations in the same
+// order as reach() (the build does not contract a product and a sum into one rounding), so
+// the lists and events are the same, in the same order, as the four-lane path makes them.
+#include "splat/kdtree_traverse.h"
+
+#include <atomic>
+#include <cstdlib>
+#include <cstring>
+
+#if defined(__GNUC__) && !defined(__clang__)
+// GCC 12 warns of the unset vector its own AVX-512 intrinsics start from (_mm512_undefined_*).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace rs {
+
+using namespace kd_detail;
+
+namespace {
+
+// Whether the CPU and the OS can run the sixteen-lane path; RAYSPLAT_SIMD=sse2 turns it off
+// (for comparing the two paths).
+bool detectWide() {
+#if RS_TRAVERSE_AVX512
+    const char* force = std::getenv("RAYSPLAT_SIMD");
+    if (force && std::strcmp(force, "sse2") == 0) return false;
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f");
+#else
+    return false;
+#endif
+}
+
+std::atomic<bool>& wideFlag() {
+    static std::atomic<bool> flag{detectWide()};
+    return flag;
+}
+
+}  // namespace
+
+bool traversalWide() { return wideFlag().load(std::memory_order_relaxed); }
+
+bool setTraversalWide(bool on) {
+    if (on && !detectWide()) return false;
+    wideFlag().store(on, std::memory_order_relaxed);
+    return true;
+}
+
+#if RS_TRAVERSE_AVX512
+
+namespace {
+
+// Lane l of a deinterleave of 48 packed floats (16 xyz triples in three vectors a, b, c):
+// component `comp` of triple l is float 3l + comp. First a two-source permute of a and b
+// (lanes whose float lies in c get anything), then one of that and c.
+struct Deinterleave {
+    alignas(64) int32_t ab[3][16], c[3][16];
+    Deinterleave() {
+        for (int comp = 0; comp < 3; ++comp)
+            for (int l = 0; l < 16; ++l) {
+                const int f = 3 * l + comp, source = f / 16, within = f % 16;
+                ab[comp][l] = source < 2 ? (source << 4 | within) : 0;
+                c[comp][l] = source == 2 ? (16 | within) : l;
+            }
+    }
+};
+const Deinterleave kDeinterleave;
+
+__attribute__((target("avx512f"))) inline __m512 dot16(const __m512 v[3], __m512 x, __m512 y, __m512 z) {
+    return _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(x, v[0]), _mm512_mul_ps(y, v[1])), _mm512_mul_ps(z, v[2]));
+}
+
+// floorToInt lane by lane: truncate, then step down where that went up.
+__attribute__((target("avx512f"))) inline __m512i floor16(__m512 x) {
+    const __m512i t = _mm512_cvttps_epi32(x);
+    const __mmask16 up = _mm512_cmp_ps_mask(x, _mm512_cvtepi32_ps(t), _CMP_LT_OS);
+    return _mm512_mask_sub_epi32(t, up, t, _mm512_set1_epi32(1));
+}
+
+__attribute__((target("avx512f"))) inline __mmask16 firstLanes(int count) {
+    return count >= 16 ? __mmask16(0xffff) : __mmask16((1u << unsigned(std::max(count, 0))) - 1u);
+}
+
+}  // namespace
+
+// gatherSampleRange for sixteen samples at a time: reached lanes (reach()'s tests), their
+// projections and first bilinear cells, the shadowable map read by a gather; the unshadowed
+// samples' indices and the others' events written compressed, in sample order. A group with a
+// reached sample whose block leaves the mask (none, by the mask's size) goes the scalar way.
+__attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(const StackEntry& e, uint32_t first,
+                                                                                uint32_t last, bool surelyReached,
+                                                                                size_t& events, size_t& listed) {
+    size_t n = events, free = listed;
+    const int layerLo = e.lo[N_], layerHi = int(e.hi[N_]) - 1;
+    int sliceMin = sliceMin_, sliceMax = sliceMax_;
+    __m512 origin[3], o[3], w[3], nrm[3], aU[3], aV[3];
+    for (int a = 0; a < 3; ++a) {
+        origin[a] = _mm512_set1_ps(g_.origin[a]), o[a] = _mm512_set1_ps(o_[a]), w[a] = _mm512_set1_ps(w_[a]);
+        nrm[a] = _mm512_set1_ps(n_[a]), aU[a] = _mm512_set1_ps(aU_[a]), aV[a] = _mm512_set1_ps(aV_[a]);
+    }
+    const __m512 invVoxel = _mm512_set1_ps(invVoxel_), length = _mm512_set1_ps(L_), kernel2 = _mm512_set1_ps(kernel2_);
+    const __m512 zero = _mm512_setzero_ps(), half = _mm512_set1_ps(0.5f);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512i halfU = _mm512_set1_epi32(halfU_), halfV = _mm512_set1_epi32(halfV_);
+    const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
+    const __m512i lo = _mm512_set1_epi32(layerLo), hi = _mm512_set1_epi32(layerHi);
+    __m512i ab[3], c[3];
+    for (int a = 0; a < 3; ++a) {
+        ab[a] = _mm512_load_si512(kDeinterleave.ab[a]);
+        c[a] = _mm512_load_si512(kDeinterleave.c[a]);
+    }
+    const uint8_t* shadow = shadow_;
+    alignas(64) int32_t slices[16];
+    for (uint32_t i = first; i < last; i += 16) {
+        // The group's positions, the floats past `last` not read (a masked load does not fault).
+        const int count = int(std::min<uint32_t>(16u, last - i));
+        const float* f = &eye_.position[i].x;
+        const __m512 va = _mm512_maskz_loadu_ps(firstLanes(3 * count), f);
+        const __m512 vb = _mm512_maskz_loadu_ps(firstLanes(3 * count - 16), f + 16);
+        const __m512 vc = _mm512_maskz_loadu_ps(firstLanes(3 * count - 32), f + 32);
+        __m512 d[3], p[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m512 world = _mm512_permutex2var_ps(_mm512_permutex2var_ps(va, ab[a], vb), c[a], vc);
+            p[a] = _mm512_mul_ps(_mm512_sub_ps(world, origin[a]), invVoxel);
+            d[a] = _mm512_sub_ps(p[a], o[a]);
+        }
+        __mmask16 reached = firstLanes(count);
+        if (!surelyReached) {
+            const __m512 along = dot16(w, d[0], d[1], d[2]);
+            const __m512 dd = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(d[0], d[0]), _mm512_mul_ps(d[1], d[1])),
+                                            _mm512_mul_ps(d[2], d[2]));
+            reached = _mm512_mask_cmp_ps_mask(reached, along, zero, _CMP_GT_OQ);
+            reached = _mm512_mask_cmp_ps_mask(reached, along, length, _CMP_LE_OQ);
+            reached = _mm512_mask_cmp_ps_mask(reached, _mm512_sub_ps(dd, _mm512_mul_ps(along, along)), kernel2, _CMP_NGE_UQ);
+            if (hasNormal_) reached = _mm512_mask_cmp_ps_mask(reached, dot16(nrm, d[0], d[1], d[2]), zero, _CMP_NLE_UQ);
+            if (!reached) continue;
+        }
+        const __m512 u = dot16(aU, d[0], d[1], d[2]), v = dot16(aV, d[0], d[1], d[2]);
+        const __m512i i0 = _mm512_add_epi32(floor16(_mm512_sub_ps(u, half)), halfU);
+        const __m512i j0 = _mm512_add_epi32(floor16(_mm512_sub_ps(v, half)), halfV);
+        const __mmask16 inMask = _mm512_mask_cmp_epu32_mask(_mm512_cmp_epu32_mask(i0, sizeU, _MM_CMPINT_LT), j0, sizeV,
+                                                            _MM_CMPINT_LT);
+        if (reached & ~inMask) {
+            // A block at the mask's edge: the scalar tests, sample by sample.
+            size_t e0 = n, f0 = free;
+            gatherSampleScalar(e, i, i + uint32_t(count), e0, f0, sliceMin, sliceMax);
+            n = e0, free = f0;
+            continue;
+        }
+        // The shadowable map's byte of each block's first cell (the map has bytes to spare past
+        // its end for the four-byte reads).
+        const __m512i cell = _mm512_add_epi32(i0, _mm512_mullo_epi32(j0, sizeU));
+        const __m512i bytes = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), reached, cell, shadow, 1);
+        const __mmask16 shadowed = _mm512_mask_test_epi32_mask(reached, bytes, _mm512_set1_epi32(0xff));
+        const __m512i index = _mm512_add_epi32(_mm512_set1_epi32(int(i)), lane);
+        const __mmask16 unshadowed = reached & ~shadowed;
+        _mm512_mask_compressstoreu_epi32(&s_.unshadowed[free], unshadowed, index);
+        free += size_t(__builtin_popcount(unshadowed));
+        if (!shadowed) continue;
+        // Events {index, slice, u, v}: the shadowed lanes compressed, then turned to records
+        // (the room has 16 events to spare past the brick's samples).
+        __m512i slice = _mm512_min_epi32(_mm512_max_epi32(floor16(p[N_]), lo), hi);
+        if (!forward_) slice = _mm512_sub_epi32(_mm512_set1_epi32(dimN_ - 1), slice);
+        const __m512i ci = _mm512_maskz_compress_epi32(shadowed, index), cs = _mm512_maskz_compress_epi32(shadowed, slice);
+        const __m512i cu = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, u));
+        const __m512i cv = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, v));
+        const __m512i t0 = _mm512_unpacklo_epi32(ci, cs), t1 = _mm512_unpackhi_epi32(ci, cs);
+        const __m512i t2 = _mm512_unpacklo_epi32(cu, cv), t3 = _mm512_unpackhi_epi32(cu, cv);
+        const __m512i r0 = _mm512_unpacklo_epi64(t0, t2), r1 = _mm512_unpackhi_epi64(t0, t2);  // events 4k, 4k + 1
+        const __m512i r2 = _mm512_unpacklo_epi64(t1, t3), r3 = _mm512_unpackhi_epi64(t1, t3);  // 4k + 2, 4k + 3
+        const __m512i q0 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(1, 0, 1, 0)), q1 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(1, 0, 1, 0));
+        const __m512i q2 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(3, 2, 3, 2)), q3 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(3, 2, 3, 2));
+        SampleEvent* out = &s_.samples[n];
+        _mm512_storeu_si512(out, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(2, 0, 2, 0)));
+        _mm512_storeu_si512(out + 4, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(3, 1, 3, 1)));
+        _mm512_storeu_si512(out + 8, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(2, 0, 2, 0)));
+        _mm512_storeu_si512(out + 12, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(3, 1, 3, 1)));
+        _mm512_store_si512(slices, cs);
+        const int made = __builtin_popcount(shadowed);
+        for (int k = 0; k < made; ++k) {
+            ++s_.sampleSlices[size_t(slices[k])];
+            sliceMin = std::min(sliceMin, slices[k]), sliceMax = std::max(sliceMax, slices[k]);
+        }
+        n += size_t(made);
+    }
+    sliceMin_ = sliceMin, sliceMax_ = sliceMax;
+    st_.samplesReached += n + free - events - listed;
+    st_.samplesTested += last - first;
+    events = n, listed = free;
+}
+
+#endif
+
+}  // namespace rs
