@@ -40,7 +40,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
                             ? kMaxAmbiguousOffset
                             : std::min(kMaxAmbiguousOffset, std::max(1, int(std::ceil(std::abs(w_[N_]) / wa))));
     }
-    wideSamples_ = traversalWide();
+    sixteen_ = traversalWide();
     hasNormal_ = n_.x != 0.f || n_.y != 0.f || n_.z != 0.f;
     tangentOffset_ = 0.5f * (std::abs(n_.x) + std::abs(n_.y) + std::abs(n_.z));
 
@@ -231,9 +231,10 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
     // the paper's settings): all of a brick's at once when their box is, else one by one,
     // before the costlier met test.
     if (!candidates || (hasNormal_ && allBehindTangent(e, candidates))) return;
-    auto voxel = [&](int bit) {  // the rank of a bit among the occupied ones is where its counts are
-        return tree_.voxels[brick.firstVoxel + uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)))];
-    };
+#if RS_TRAVERSE_AVX512
+    if (sixteen_) return gatherBrickOccluders16(e, brick, candidates);
+#endif
+    auto voxel = [&](int bit) { return brickVoxel(brick, bit); };
 #if defined(__SSE2__)
     const __m128i corner[3] = {_mm_set1_epi32(e.lo[0]), _mm_set1_epi32(e.lo[1]), _mm_set1_epi32(e.lo[2])};
     // Four candidates at a time: the tangent test and the sure met test in lanes, the same
@@ -498,7 +499,7 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
 void CylinderTraversal::gatherSampleRange(const StackEntry& e, uint32_t first, uint32_t last, bool surelyReached,
                                           size_t& events, size_t& listed) {
 #if RS_TRAVERSE_AVX512
-    if (wideSamples_) return gatherSampleRange16(e, first, last, surelyReached, events, listed);
+    if (sixteen_) return gatherSampleRange16(e, first, last, surelyReached, events, listed);
 #endif
     // The events are written field by field into the room made by the caller: a pushed
     // temporary would be built on the stack and reloaded whole, a store-forwarding stall per

@@ -81,7 +81,8 @@
 #include "splat/eye.h"
 #include "splat/kdtree.h"
 
-// The sample step has a sixteen-lane AVX-512 path, chosen at run time (kdtree_traverse_avx512.cpp).
+// The occluder and sample steps have sixteen-lane AVX-512 paths, chosen at run time
+// (kdtree_traverse_avx512.cpp).
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define RS_TRAVERSE_AVX512 1
 #else
@@ -90,7 +91,7 @@
 
 namespace rs {
 
-// Whether traversals use the sixteen-lane sample step: where the CPU has AVX-512 and the
+// Whether traversals use the sixteen-lane steps: where the CPU has AVX-512 and the
 // environment does not say RAYSPLAT_SIMD=sse2. Both paths give the same answers, bit for bit;
 // setTraversalWide chooses (false when asked for a path the CPU lacks).
 bool traversalWide();
@@ -244,7 +245,14 @@ private:
     bool descend(StackEntry& e, Node node);
     void prefetchNode(uint32_t index) const;
     void gatherBrick(const StackEntry& e, uint32_t index);
+#if RS_TRAVERSE_AVX512
+    void gatherBrickOccluders16(const StackEntry& e, const Brick& brick, uint64_t candidates);
+#endif
     void gatherOcclusionBlock(const StackEntry& e, Node node);
+    // The counts of a brick's voxel: the rank of its bit among the occupied ones is where they are.
+    VoxelOcclusion brickVoxel(const Brick& brick, int bit) const {
+        return tree_.voxels[brick.firstVoxel + uint32_t(bitCount(brick.occupied & ((uint64_t(1) << bit) - 1)))];
+    }
     // An occluder's voxel centre must lie strictly in front of the origin's tangent plane
     // (§5.2), past half the normal's L1 norm: the whole voxel box does.
     bool inFrontOfTangent(const Vec3& centre) const { return !hasNormal_ || glm::dot(centre - o_, n_) > tangentOffset_; }
@@ -306,7 +314,7 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
-    bool wideSamples_;  // traversalWide(), read once a cylinder
+    bool sixteen_;  // traversalWide(), read once a cylinder: the sixteen-lane steps
     uint8_t* shadow_;  // the shadowable map's cell (0, 0)
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'

@@ -84,6 +84,60 @@ __attribute__((target("avx512f"))) inline __mmask16 firstLanes(int count) {
 
 }  // namespace
 
+// gatherBrick's candidates a layer of the brick at a time (16 voxels, bit x + 4y of the layer's
+// 16): the tangent test, the sure met test and the centres' cells in lanes, the same operations
+// in the same order as the four-lane step; the valid-cell test by gathers of the rows' ranges;
+// the exact met test and the occluder for the lanes left, in bit order.
+__attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders16(const StackEntry& e, const Brick& brick,
+                                                                                   uint64_t candidates) {
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), three = _mm512_set1_epi32(3);
+    const __m512i vx = _mm512_add_epi32(_mm512_set1_epi32(e.lo[0]), _mm512_and_si512(lane, three));
+    const __m512i vy = _mm512_add_epi32(_mm512_set1_epi32(e.lo[1]), _mm512_srli_epi32(lane, 2));
+    __m512 o[3], w[3], nrm[3], aU[3], aV[3];
+    for (int a = 0; a < 3; ++a) {
+        o[a] = _mm512_set1_ps(o_[a]), w[a] = _mm512_set1_ps(w_[a]), nrm[a] = _mm512_set1_ps(n_[a]);
+        aU[a] = _mm512_set1_ps(aU_[a]), aV[a] = _mm512_set1_ps(aV_[a]);
+    }
+    const __m512 half = _mm512_set1_ps(0.5f), zero = _mm512_setzero_ps();
+    const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
+    const int32_t* rows = &s_.rows[0].lo;
+    for (int layer = 0; layer < kBrickSize; ++layer) {
+        const __mmask16 bits = __mmask16(candidates >> (16 * layer));
+        if (!bits) continue;
+        const __m512i vz = _mm512_set1_epi32(e.lo[2] + layer);
+        const __m512i vi[3] = {vx, vy, vz};
+        __m512 d[3];
+        for (int a = 0; a < 3; ++a) d[a] = _mm512_sub_ps(_mm512_add_ps(_mm512_cvtepi32_ps(vi[a]), half), o[a]);
+        const __mmask16 front =
+            hasNormal_ ? _mm512_mask_cmp_ps_mask(bits, dot16(nrm, d[0], d[1], d[2]), _mm512_set1_ps(tangentOffset_), _CMP_GT_OS) : bits;
+        if (!front) continue;
+        const __m512 along = dot16(w, d[0], d[1], d[2]), dd = dot16(d, d[0], d[1], d[2]);
+        __mmask16 sure = _mm512_cmp_ps_mask(along, zero, _CMP_GE_OS);
+        sure = _mm512_mask_cmp_ps_mask(sure, along, _mm512_set1_ps(L_), _CMP_LE_OS);
+        sure = _mm512_mask_cmp_ps_mask(sure, _mm512_sub_ps(dd, _mm512_mul_ps(along, along)), _mm512_set1_ps(hOcc_ * hOcc_),
+                                       _CMP_LT_OS);
+        const __m512i cu = _mm512_add_epi32(floor16(dot16(aU, d[0], d[1], d[2])), _mm512_set1_epi32(halfU_));
+        const __m512i cv = _mm512_add_epi32(floor16(dot16(aV, d[0], d[1], d[2])), _mm512_set1_epi32(halfV_));
+        // invalidCell: inside the mask and outside its row's valid range.
+        const __mmask16 inMask =
+            _mm512_mask_cmp_epu32_mask(_mm512_mask_cmp_epu32_mask(front, cu, sizeU, _MM_CMPINT_LT), cv, sizeV, _MM_CMPINT_LT);
+        const __m512i rowLo = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_slli_epi32(cv, 1), rows, 4);
+        const __m512i rowHi =
+            _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_add_epi32(_mm512_slli_epi32(cv, 1), _mm512_set1_epi32(1)), rows, 4);
+        const __mmask16 invalid = _mm512_mask_cmp_epi32_mask(inMask, cu, rowLo, _MM_CMPINT_LT) |
+                                  _mm512_mask_cmp_epi32_mask(inMask, cu, rowHi, _MM_CMPINT_NLE);
+        const unsigned keep = unsigned(front & ~invalid);
+        if (!keep) continue;
+        alignas(64) int32_t cus[16], cvs[16];
+        _mm512_store_si512(cus, cu), _mm512_store_si512(cvs, cv);
+        for (unsigned k = keep; k; k &= k - 1) {
+            const int l = __builtin_ctz(k);
+            const int v[3] = {e.lo[0] + (l & 3), e.lo[1] + (l >> 2), e.lo[2] + layer};
+            if (sure >> l & 1u || voxelMet(v[0], v[1], v[2])) addOccluderAt(cus[l], cvs[l], v[N_], brickVoxel(brick, 16 * layer + l));
+        }
+    }
+}
+
 // gatherSampleRange for sixteen samples at a time: reached lanes (reach()'s tests), their
 // projections and first bilinear cells, the shadowable map read by a gather; the unshadowed
 // samples' indices and the others' events written compressed, in sample order. A group with a
