@@ -371,14 +371,30 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         boxTests4(partLo, partHi, m, su, rect[group]);
         may |= m << (4 * group), sure |= su << (4 * group);
     }
+    // Octants read one after another with the same test are read as one range (the same tests
+    // of the same samples, in fewer, fuller groups of lanes).
+    uint32_t runFirst = 0, runLast = 0;  // the octants read but not yet handed over
+    bool runSure = false;
+    auto flush = [&] {
+        if (runFirst < runLast) gatherSampleRange(met.entry, runFirst, runLast, runSure, n, listed);
+        runFirst = runLast = 0;
+    };
     for (int k = 0; k < 8; ++k) {
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
         if (first == last || !(may >> k & 1u)) continue;
         const int32_t(&r)[4][4] = rect[k >> 2];
         const int lane = k & 3;
-        if (sure >> k & 1u && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) takeAll(first, last);
-        else gatherSampleRange(met.entry, first, last, sure >> k & 1u, n, listed);
+        const bool octantSure = sure >> k & 1u;
+        if (octantSure && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) {
+            flush();  // the lists stay in sample order
+            takeAll(first, last);
+            continue;
+        }
+        if (runFirst < runLast && (first != runLast || octantSure != runSure)) flush();
+        if (runFirst == runLast) runFirst = first, runSure = octantSure;
+        runLast = last;
     }
+    flush();
 #else
     for (int k = 0; k < 8; ++k) {
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
