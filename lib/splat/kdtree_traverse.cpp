@@ -326,12 +326,12 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     brick.sampleBounds(corner, lo, hi);
     prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
         prefetchSamples(eye_.pixel, brick);
-    // Room for all the brick's samples in both lists (and kEventSlack events more, for the wide
+    // Room for all the brick's samples in both lists (and kEventSlack entries more, for the wide
     // path's whole-vector stores), made once; each part writes at the lists' ends (n, listed)
     // and the lists are cut to them at the end.
     size_t n = s_.samples.size(), listed = 0;
     s_.samples.resize(n + brick.sampleCount + kEventSlack);
-    s_.unshadowed.resize(brick.sampleCount);
+    s_.unshadowed.resize(brick.sampleCount + kEventSlack);
     auto takeAll = [&](uint32_t first, uint32_t last) {
         std::iota(s_.unshadowed.begin() + std::ptrdiff_t(listed), s_.unshadowed.begin() + std::ptrdiff_t(listed + (last - first)), first);
         listed += last - first;

@@ -122,7 +122,7 @@ constexpr int kMaxAmbiguousOffset = 4;    // N slices
 constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
 constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
 constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested that much wider
-constexpr size_t kEventSlack = 16;         // sample events: room past the last, for sixteen-lane stores
+constexpr size_t kEventSlack = 16;         // sample lists: room past the last entry, for sixteen-lane stores
 
 namespace kd_detail {
 
@@ -300,6 +300,9 @@ private:
     void prepareSweep();
     float read(const SampleEvent& ev) const;
     void read4(const SampleEvent* ev, float vis[4]) const;
+#if RS_TRAVERSE_AVX512
+    void read16(const SampleEvent* ev, int count, float vis[16]) const;
+#endif
 
     const OcclusionTree& tree_;
     const EyeSamples& eye_;
@@ -412,6 +415,16 @@ void CylinderTraversal::sweep(Visit&& visit) {
     const EventVector<kd_detail::OccluderEvent>& occluders = s_.occludersSorted;
     for (int slice = sliceMin_; is < samples.size(); ++slice) {
         const size_t end = s_.sampleSlices[size_t(slice)];  // the sort left each slice's end there
+#if RS_TRAVERSE_AVX512
+        if (sixteen_)
+            while (is < end) {
+                const int count = int(std::min<size_t>(16, end - is));
+                alignas(64) float vis[16];
+                read16(&samples[is], count, vis);
+                for (int k = 0; k < count; ++k, ++is)
+                    if (vis[k] > 0.f) visit(samples[is].index, vis[k]), ++st_.samplesVisited;
+            }
+#endif
 #if defined(__SSE2__)
         for (; is + 4 <= end; is += 4) {
             alignas(16) float vis[4];

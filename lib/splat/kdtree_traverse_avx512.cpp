@@ -11,6 +11,7 @@
 #if defined(__GNUC__) && !defined(__clang__)
 // GCC 12 warns of the unset vector its own AVX-512 intrinsics start from (_mm512_undefined_*).
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #endif
 
 namespace rs {
@@ -80,6 +81,28 @@ __attribute__((target("avx512f"))) inline __m512i floor16(__m512 x) {
 
 __attribute__((target("avx512f"))) inline __mmask16 firstLanes(int count) {
     return count >= 16 ? __mmask16(0xffff) : __mmask16((1u << unsigned(std::max(count, 0))) - 1u);
+}
+
+// The 64-bit words at base + 4·index for the `active` lanes, eight lanes at a time, split into
+// their low (even) and high (odd) 32-bit halves.
+__attribute__((target("avx512f"))) inline void gatherPairs(__mmask16 active, __m512i index, const void* base, __m512i& even,
+                                                           __m512i& odd) {
+    const __m512i a = _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), __mmask8(active), _mm512_castsi512_si256(index), base, 4);
+    const __m512i b =
+        _mm512_mask_i32gather_epi64(_mm512_setzero_si512(), __mmask8(active >> 8), _mm512_extracti64x4_epi64(index, 1), base, 4);
+    even = _mm512_permutex2var_epi32(a, _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30), b);
+    odd = _mm512_permutex2var_epi32(a, _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31), b);
+}
+
+// A bilinear weight, made 0 where cell i lies outside its row's valid range [lo, hi].
+__attribute__((target("avx512f"))) inline __m512 validWeight(__m512i i, __m512i lo, __m512i hi, __m512 w) {
+    const __mmask16 outside = _mm512_cmp_epi32_mask(i, lo, _MM_CMPINT_LT) | _mm512_cmp_epi32_mask(i, hi, _MM_CMPINT_NLE);
+    return _mm512_maskz_mov_ps(__mmask16(~outside), w);
+}
+
+// weight × min(1, cell value).
+__attribute__((target("avx512f"))) inline __m512 cellTerm(__m512 w, __m512i c) {
+    return _mm512_mul_ps(w, _mm512_min_ps(_mm512_set1_ps(1.f), _mm512_castsi512_ps(c)));
 }
 
 }  // namespace
@@ -209,7 +232,9 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         const __mmask16 shadowed = _mm512_mask_test_epi32_mask(reached, bytes, _mm512_set1_epi32(0xff));
         const __m512i index = _mm512_add_epi32(_mm512_set1_epi32(int(i)), lane);
         const __mmask16 unshadowed = reached & ~shadowed;
-        _mm512_mask_compressstoreu_epi32(&s_.unshadowed[free], unshadowed, index);
+        // Compressed in a register and stored whole (the list has room to spare): a compressing
+        // store to memory is slow on some CPUs.
+        _mm512_storeu_si512(&s_.unshadowed[free], _mm512_maskz_compress_epi32(unshadowed, index));
         free += size_t(__builtin_popcount(unshadowed));
         if (!shadowed) continue;
         // Events {index, slice, u, v}: the shadowed lanes compressed, then turned to records
@@ -242,6 +267,54 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
     st_.samplesReached += n + free - events - listed;
     st_.samplesTested += last - first;
     events = n, listed = free;
+}
+
+// read() for `count` (1…16) consecutive sample events, lane by lane the same operations in the
+// same order (so the same values): the events' u and v turned to lanes, each block's two cell
+// pairs and its rows' valid ranges (lo₀ hi₀ lo₁ hi₁, side by side) read eight lanes at a time
+// as 64-bit pairs.
+__attribute__((target("avx512f"))) void CylinderTraversal::read16(const SampleEvent* ev, int count, float vis[16]) const {
+    static_assert(sizeof(SampleEvent) == 16, "an event is four floats: index, slice, u, v");
+    const float* f = reinterpret_cast<const float*>(ev);
+    const __m512 e0 = _mm512_maskz_loadu_ps(firstLanes(4 * count), f), e1 = _mm512_maskz_loadu_ps(firstLanes(4 * count - 16), f + 16);
+    const __m512 e2 = _mm512_maskz_loadu_ps(firstLanes(4 * count - 32), f + 32), e3 = _mm512_maskz_loadu_ps(firstLanes(4 * count - 48), f + 48);
+    // Lanes 0-7: the u of events 0-7 (float 4l + 2 of the pair of vectors), lanes 8-15 their v.
+    const __m512i uvIndex = _mm512_setr_epi32(2, 6, 10, 14, 18, 22, 26, 30, 3, 7, 11, 15, 19, 23, 27, 31);
+    const __m512 lowHalf = _mm512_permutex2var_ps(e0, uvIndex, e1), highHalf = _mm512_permutex2var_ps(e2, uvIndex, e3);
+    const __m512 u = _mm512_shuffle_f32x4(lowHalf, highHalf, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m512 v = _mm512_shuffle_f32x4(lowHalf, highHalf, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m512 half = _mm512_set1_ps(0.5f), one = _mm512_set1_ps(1.f), x = _mm512_sub_ps(u, half), y = _mm512_sub_ps(v, half);
+    const __m512i ix = floor16(x), iy = floor16(y);
+    const __m512 fx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(ix)), fy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(iy));
+    const __m512i i0 = _mm512_add_epi32(ix, _mm512_set1_epi32(halfU_)), j0 = _mm512_add_epi32(iy, _mm512_set1_epi32(halfV_));
+    const __mmask16 active = firstLanes(count);
+    const __mmask16 inside = _mm512_mask_cmp_epu32_mask(_mm512_cmp_epu32_mask(i0, _mm512_set1_epi32(sizeU_ - 1), _MM_CMPINT_LT), j0,
+                                                        _mm512_set1_epi32(sizeV_ - 1), _MM_CMPINT_LT);
+    if (active & ~inside) {
+        for (int k = 0; k < count; ++k) vis[k] = read(ev[k]);  // a block at the mask's edge (none, by its size)
+        return;
+    }
+    // 64-bit reads, eight lanes at a time: the cells (c, c + 1) of rows j0 and j0 + 1, and the
+    // ranges (lo, hi) of rows j0 and j0 + 1; then the pairs split into lanes.
+    const __m512i cell = _mm512_add_epi32(i0, _mm512_mullo_epi32(j0, _mm512_set1_epi32(sizeU_)));
+    const __m512i nextRow = _mm512_add_epi32(cell, _mm512_set1_epi32(sizeU_)), row = _mm512_slli_epi32(j0, 1);
+    const __m512i rowNext = _mm512_add_epi32(row, _mm512_set1_epi32(2));
+    const double* sweep = reinterpret_cast<const double*>(s_.sweep.data());
+    const long long* rows = reinterpret_cast<const long long*>(s_.rows.data());
+    __m512i c00, c10, c01, c11, lo0, hi0, lo1, hi1;
+    gatherPairs(active, cell, sweep, c00, c10);
+    gatherPairs(active, nextRow, sweep, c01, c11);
+    gatherPairs(active, row, rows, lo0, hi0);
+    gatherPairs(active, rowNext, rows, lo1, hi1);
+    const __m512i i1 = _mm512_add_epi32(i0, _mm512_set1_epi32(1));
+    const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
+    const __m512 w0 = validWeight(i0, lo0, hi0, _mm512_mul_ps(gx, gy)), w1 = validWeight(i1, lo0, hi0, _mm512_mul_ps(fx, gy));
+    const __m512 w2 = validWeight(i0, lo1, hi1, _mm512_mul_ps(gx, fy)), w3 = validWeight(i1, lo1, hi1, _mm512_mul_ps(fx, fy));
+    // (t0 + t2) + (t1 + t3), as read() adds its lanes.
+    const __m512 num = _mm512_add_ps(_mm512_add_ps(cellTerm(w0, c00), cellTerm(w2, c01)), _mm512_add_ps(cellTerm(w1, c10), cellTerm(w3, c11)));
+    const __m512 den = _mm512_add_ps(_mm512_add_ps(w0, w2), _mm512_add_ps(w1, w3));
+    const __mmask16 lit = _mm512_cmp_ps_mask(num, _mm512_setzero_ps(), _CMP_GT_OS);
+    _mm512_storeu_ps(vis, _mm512_mask_sub_ps(one, lit, one, _mm512_mask_div_ps(one, lit, num, den)));
 }
 
 #endif
