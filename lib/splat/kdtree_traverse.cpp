@@ -51,8 +51,8 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     sizeU_ = 2 * halfU_, sizeV_ = 2 * halfV_;
     const size_t cells = size_t(sizeU_) * size_t(sizeV_);
     if (s_.sweep.size() < cells) s_.sweep.resize(cells);
-    // A row and a cell in front; three bytes past the end for the wide path's four-byte reads.
-    if (s_.shadowable.size() < cells + size_t(sizeU_) + 4) s_.shadowable.resize(cells + size_t(sizeU_) + 4);
+    // A row and a cell in front; one cell past the end for the wide path's four-byte reads.
+    if (s_.shadowable.size() < cells + size_t(sizeU_) + 2) s_.shadowable.resize(cells + size_t(sizeU_) + 2, kNoOccluder);
     shadow_ = s_.shadowable.data() + sizeU_ + 1;
     findValidRows();
 #if defined(__SSE2__)
@@ -78,7 +78,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
 // touched.
 CylinderTraversal::~CylinderTraversal() {
     for (const OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
-    markShadowable(0);
+    clearShadowable();
     for (int i = sliceMin_; i <= sliceMax_; ++i) s_.sampleSlices[size_t(i)] = 0;
     for (int i = occluderMin_; i <= occluderMax_; ++i) s_.occluderSlices[size_t(i)] = 0;
 }
@@ -287,29 +287,41 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
 
 // -- Reaching the samples (§5.1) --------------------------------------------------------------
 
-// Marks (value 1) or clears (0) the cells (i0, j0) whose 2×2 bilinear block (i0…i0+1,
-// j0…j0+1) holds an occluder's cell: a sample whose block starts at an unmarked cell reads 0 in
-// every slice, so V = 1. The map has a row and a cell in front (shadow_ is past them), so the
-// four cells are written without tests: for an occluder in column 0, the "cell to the left" is
-// the previous row's last one, a mask edge no reached sample's block starts at (at worst a
-// sample there would be swept, to the same V).
-void CylinderTraversal::markShadowable(uint8_t value) {
+// Marks each cell (i0, j0) whose 2×2 bilinear block (i0…i0+1, j0…j0+1) holds an occluder's
+// cell with the first slice of those occluders: a sample in slice s whose block starts there
+// reads only occluders of slices < s, so it reads 0, V = 1, when s is at most that first slice.
+// The map has a row and a cell in front (shadow_ is past them), so the four cells are written
+// without tests: for an occluder in column 0, the "cell to the left" is the previous row's last
+// one, a mask edge no reached sample's block starts at (at worst a sample there would be swept,
+// to the same V). A slice past the map's range is marked as the largest one it holds, a slice
+// no later than the occluder's: a sample may be swept that needs not be, never the other way.
+void CylinderTraversal::markShadowable() {
     for (const OccluderEvent& ev : s_.occluders) {
-        uint8_t* row = shadow_ + ev.cell;
-        row[0] = row[-1] = row[-sizeU_] = row[-sizeU_ - 1] = value;
+        uint16_t* row = shadow_ + ev.cell;
+        const uint16_t slice = uint16_t(std::min(ev.slice, int32_t(kNoOccluder) - 1));
+        for (uint16_t* c : {row, row - 1, row - sizeU_, row - sizeU_ - 1}) *c = std::min(*c, slice);
     }
 }
 
-// Whether a sample whose bilinear block starts at mask cell (i0, j0) may read an occluder.
-inline bool CylinderTraversal::shadowable(int i0, int j0) const {
-    if (unsigned(i0) < unsigned(sizeU_) && unsigned(j0) < unsigned(sizeV_))
-        return shadow_[size_t(i0) + size_t(sizeU_) * size_t(j0)] != 0;
+// The map all kNoOccluder again, for the next cylinder.
+void CylinderTraversal::clearShadowable() {
+    for (const OccluderEvent& ev : s_.occluders) {
+        uint16_t* row = shadow_ + ev.cell;
+        row[0] = row[-1] = row[-sizeU_] = row[-sizeU_ - 1] = kNoOccluder;
+    }
+}
+
+// The first slice of an occluder in the bilinear block that starts at mask cell (i0, j0)
+// (kNoOccluder: none, or one past the map's range): a sample in a slice up to it reads V = 1.
+inline int CylinderTraversal::firstShadowingSlice(int i0, int j0) const {
+    if (unsigned(i0) < unsigned(sizeU_) && unsigned(j0) < unsigned(sizeV_)) return shadow_[size_t(i0) + size_t(sizeU_) * size_t(j0)];
     // A block at the mask's edge (none is, by the mask's size): cells outside hold nothing.
+    int first = kNoOccluder;
     for (const OccluderEvent& ev : s_.occluders) {
         const int cu = ev.cell % sizeU_, cv = ev.cell / sizeU_;
-        if ((cu == i0 || cu == i0 + 1) && (cv == j0 || cv == j0 + 1)) return true;
+        if ((cu == i0 || cu == i0 + 1) && (cv == j0 || cv == j0 + 1)) first = std::min(first, std::min(ev.slice, kNoOccluder - 1));
     }
-    return false;
+    return first;
 }
 
 // A met brick's samples, by octant: each octant's part of the box its samples lie in is tested
@@ -454,9 +466,9 @@ bool CylinderTraversal::boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) cons
 bool CylinderTraversal::rectUnshadowed(int i0, int i1, int j0, int j1) const {
     if (i0 < 0 || j0 < 0 || i1 >= sizeU_ || j1 >= sizeV_) return false;
     for (int j = j0; j <= j1; ++j) {
-        const uint8_t* row = shadow_ + size_t(sizeU_) * size_t(j);
+        const uint16_t* row = shadow_ + size_t(sizeU_) * size_t(j);
         for (int i = i0; i <= i1; ++i)
-            if (row[i]) return false;
+            if (row[i] != kNoOccluder) return false;
     }
     return true;
 }
@@ -555,17 +567,18 @@ void CylinderTraversal::gatherSampleScalar(const StackEntry& e, uint32_t first, 
     }
 }
 
-// A reached sample no occluder can shadow goes to the unshadowed list, another becomes an event
-// in its slice (its voxel layer clamped to the brick's, where the tree put it).
+// A reached sample's slice is its voxel layer's (clamped to the brick's, where the tree put
+// it). One that no occluder of an earlier slice can shadow goes to the unshadowed list, another
+// becomes an event in its slice.
 inline void CylinderTraversal::addReached(uint32_t i, const Reach& r, int layerLo, int layerHi, size_t& events,
                                           size_t& listed, int& sliceMin, int& sliceMax) {
-    if (!shadowable(r.i0, r.j0)) {
+    const int slice = sliceOf(std::clamp(r.voxelN, layerLo, layerHi));
+    if (slice <= firstShadowingSlice(r.i0, r.j0)) {
         s_.unshadowed[listed++] = i;
         return;
     }
     SampleEvent& ev = s_.samples[events++];
     ev.index = i;
-    const int slice = sliceOf(std::clamp(r.voxelN, layerLo, layerHi));
     ev.slice = slice;
     ++s_.sampleSlices[size_t(slice)];
     sliceMin = std::min(sliceMin, slice), sliceMax = std::max(sliceMax, slice);

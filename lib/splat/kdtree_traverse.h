@@ -54,11 +54,11 @@
 //    cylinder and light would leak through walls at small h.
 // The definition does not depend on the kd order: the traversal collects the met
 // occluders and reached samples (CylinderTraversal::gather), then sweeps them slice by slice
-// (sweep); a sample none of whose four cells holds an occluder reads V = 1 at once. The kd
-// order is near to far (lower child first iff ω_a ≥ 0); nothing depends on it. (An early
-// exit that skipped nodes whose cells were all full before their first slice was measured:
-// it pruned ~2 % of the nodes it tested and cost more than it saved, in renders of interiors
-// too; the answers are the same without it.) Cylinder parts outside the grid or past L are
+// (sweep); a sample none of whose four cells holds an occluder of an earlier slice reads V = 1
+// at once. The kd order is near to far (lower child first iff ω_a ≥ 0); nothing depends on it.
+// (An early exit that skipped nodes whose cells were all full before their first slice was
+// measured: it pruned ~2 % of the nodes it tested and cost more than it saved, in renders of
+// interiors too; the answers are the same without it.) Cylinder parts outside the grid or past L are
 // never visited. At a brick leaf the occupied voxels (its mask's
 // bits inside the cylinder part's bounds) that are met become occluders and its samples that
 // are reached are collected (octants of the brick out of the cylinder's reach are skipped
@@ -122,6 +122,7 @@ constexpr int kMaxAmbiguousOffset = 4;    // N slices
 constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
 constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
 constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested that much wider
+constexpr uint16_t kNoOccluder = 0xffff;  // the shadowable map's "no occluder in this block"
 constexpr size_t kEventSlack = 16;         // sample lists: room past the last entry, for sixteen-lane stores
 
 namespace kd_detail {
@@ -194,11 +195,13 @@ class TraversalScratch {
 public:
     std::vector<kd_detail::StackEntry> stack;
     std::vector<float> sweep;
-    std::vector<uint8_t> shadowable;  // per mask cell (a row and a cell in front): one of the 2×2 cells from it on holds an occluder
+    // Per mask cell (a row and a cell in front): the first slice of an occluder in one of the 2×2
+    // cells from it on (kNoOccluder: none).
+    std::vector<uint16_t> shadowable;
     std::vector<kd_detail::MetBrick> bricks;  // the met bricks that hold samples, in kd order
     EventVector<kd_detail::OccluderEvent> occluders, occludersSorted;
     EventVector<kd_detail::SampleEvent> samples, samplesSorted;
-    EventVector<uint32_t> unshadowed;  // one brick's reached samples that read V = 1 in any slice
+    EventVector<uint32_t> unshadowed;  // one brick's reached samples that no occluder before their slice can shadow
     // Per slice: how many sample and occluder events this cylinder has there (zero between
     // cylinders), counted as they are made, for the sweep's counting sort.
     std::vector<uint32_t> sampleSlices, occluderSlices;
@@ -208,11 +211,11 @@ public:
 // One cylinder's traversal, in the paper's steps: the mask is set up by the constructor
 // (§5.1); gather() walks the tree near to far and collects the met occluders and the met
 // bricks that hold samples (§5.1–5.3); visitSamples() reaches the samples of those bricks and
-// hands over at once, while the brick's arrays are in cache, the ones that read V = 1 in any
-// slice (none of their bilinear cells holds an occluder: 90 % of them at the paper's settings on
-// the glossy box) — a brick's or an octant's at once, positions unread, when the box its samples
-// lie in is surely reached and unshadowed (59 % of them there); sweep() reads the others'
-// visibility slice by slice (§5.1).
+// hands over at once, while the brick's arrays are in cache, the ones that read V = 1 (none of
+// their bilinear cells holds an occluder of an earlier slice: 91 % of them at the paper's
+// settings on the glossy box) — a brick's or an octant's at once, positions unread, when the box
+// its samples lie in is surely reached and holds no occluder's block at all (59 % of them there);
+// sweep() reads the others' visibility slice by slice (§5.1).
 class CylinderTraversal {
 public:
     CylinderTraversal(const OcclusionTree& tree, const EyeSamples& eye, const Cylinder& cyl, TraversalScratch& s);
@@ -265,7 +268,8 @@ private:
     bool voxelMet(int x, int y, int z) const;
 
     // Reaching the samples.
-    void markShadowable(uint8_t value);
+    void markShadowable();
+    void clearShadowable();
     void gatherBrickSamples(const kd_detail::MetBrick& met);
     struct Reach {  // a reached sample: its (u, v), first bilinear cell and voxel layer along N
         float u, v;
@@ -294,7 +298,7 @@ private:
 #if defined(__SSE2__)
     void boxTests4(const __m128 lo[3], const __m128 hi[3], uint32_t& may, uint32_t& sure, int32_t rect[4][4]) const;
 #endif
-    bool shadowable(int i0, int j0) const;
+    int firstShadowingSlice(int i0, int j0) const;
 
     // Sweep.
     void prepareSweep();
@@ -318,7 +322,7 @@ private:
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
     bool sixteen_;  // traversalWide(), read once a cylinder: the sixteen-lane steps
-    uint8_t* shadow_;  // the shadowable map's cell (0, 0)
+    uint16_t* shadow_;  // the shadowable map's cell (0, 0)
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
@@ -395,7 +399,7 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
 // the others become events for the sweep.
 template <class Visit>
 void CylinderTraversal::visitSamples(Visit&& visit) {
-    markShadowable(1);
+    markShadowable();
     for (const kd_detail::MetBrick& met : s_.bricks) {
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)

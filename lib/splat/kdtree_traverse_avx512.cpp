@@ -187,7 +187,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         ab[a] = _mm512_load_si512(kDeinterleave.ab[a]);
         c[a] = _mm512_load_si512(kDeinterleave.c[a]);
     }
-    const uint8_t* shadow = shadow_;
+    const uint16_t* shadow = shadow_;
     alignas(64) int32_t slices[16];
     for (uint32_t i = first; i < last; i += 16) {
         // The group's positions, the floats past `last` not read (a masked load does not fault).
@@ -225,11 +225,14 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
             n = e0, free = f0;
             continue;
         }
-        // The shadowable map's byte of each block's first cell (the map has bytes to spare past
-        // its end for the four-byte reads).
+        // The slices, and the shadowable map's first slice of each block (a 16-bit cell; the map
+        // has one to spare past its end for the four-byte reads): a lane is shadowed past it.
+        __m512i slice = _mm512_min_epi32(_mm512_max_epi32(floor16(p[N_]), lo), hi);
+        if (!forward_) slice = _mm512_sub_epi32(_mm512_set1_epi32(dimN_ - 1), slice);
         const __m512i cell = _mm512_add_epi32(i0, _mm512_mullo_epi32(j0, sizeU));
-        const __m512i bytes = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), reached, cell, shadow, 1);
-        const __mmask16 shadowed = _mm512_mask_test_epi32_mask(reached, bytes, _mm512_set1_epi32(0xff));
+        const __m512i first = _mm512_and_si512(_mm512_mask_i32gather_epi32(_mm512_setzero_si512(), reached, cell, shadow, 2),
+                                               _mm512_set1_epi32(0xffff));
+        const __mmask16 shadowed = _mm512_mask_cmp_epi32_mask(reached, slice, first, _MM_CMPINT_NLE);
         const __m512i index = _mm512_add_epi32(_mm512_set1_epi32(int(i)), lane);
         const __mmask16 unshadowed = reached & ~shadowed;
         // Compressed in a register and stored whole (the list has room to spare): a compressing
@@ -239,8 +242,6 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         if (!shadowed) continue;
         // Events {index, slice, u, v}: the shadowed lanes compressed, then turned to records
         // (the room has 16 events to spare past the brick's samples).
-        __m512i slice = _mm512_min_epi32(_mm512_max_epi32(floor16(p[N_]), lo), hi);
-        if (!forward_) slice = _mm512_sub_epi32(_mm512_set1_epi32(dimN_ - 1), slice);
         const __m512i ci = _mm512_maskz_compress_epi32(shadowed, index), cs = _mm512_maskz_compress_epi32(shadowed, slice);
         const __m512i cu = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, u));
         const __m512i cv = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, v));
