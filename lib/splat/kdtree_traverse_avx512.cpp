@@ -1,7 +1,8 @@
-// The traversal's sample step sixteen samples at a time, on CPUs with AVX-512 (chosen at run
-// time: the build assumes only x86-64's SSE2). Each lane makes the same operations in the same
-// order as reach() (the build does not contract a product and a sum into one rounding), so
-// the lists and events are the same, in the same order, as the four-lane path makes them.
+// The traversal's sixteen-lane steps, on CPUs with AVX-512 (chosen at run time: the build
+// assumes only x86-64's SSE2): the reach test, a brick's candidate occluders and the sweep's
+// reads. Each lane makes the same operations in the same order as the four-lane step (the
+// build does not contract a product and a sum into one rounding), so the lists, events and
+// values are the same, in the same order, as the four-lane path makes them.
 #include "splat/kdtree_traverse.h"
 
 #include <atomic>
@@ -68,6 +69,7 @@ struct Deinterleave {
 };
 const Deinterleave kDeinterleave;
 
+// dot4 in sixteen lanes: (x·v₀ + y·v₁) + z·v₂, glm::dot's order.
 __attribute__((target("avx512f"))) inline __m512 dot16(const __m512 v[3], __m512 x, __m512 y, __m512 z) {
     return _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(x, v[0]), _mm512_mul_ps(y, v[1])), _mm512_mul_ps(z, v[2]));
 }
@@ -79,6 +81,7 @@ __attribute__((target("avx512f"))) inline __m512i floor16(__m512 x) {
     return _mm512_mask_sub_epi32(t, up, t, _mm512_set1_epi32(1));
 }
 
+// A mask of the first `count` lanes (none when count ≤ 0).
 __attribute__((target("avx512f"))) inline __mmask16 firstLanes(int count) {
     return count >= 16 ? __mmask16(0xffff) : __mmask16((1u << unsigned(std::max(count, 0))) - 1u);
 }
@@ -162,9 +165,10 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
 }
 
 // gatherSampleRange for sixteen samples at a time: reached lanes (reach()'s tests), their
-// projections and first bilinear cells, the shadowable map read by a gather; the unshadowed
-// samples' indices and the others' events written compressed, in sample order. A group with a
-// reached sample whose block leaves the mask (none, by the mask's size) goes the scalar way.
+// projections, first bilinear cells and slices, the shadowable map's first occluder slices read
+// by a gather; the unshadowed samples' indices and the others' events written compressed, in
+// sample order. A group with a reached sample whose block leaves the mask (none, by the mask's
+// size) goes the scalar way.
 __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(const StackEntry& e, uint32_t first,
                                                                                 uint32_t last, bool surelyReached,
                                                                                 size_t& events, size_t& listed) {
