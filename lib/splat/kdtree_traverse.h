@@ -81,8 +81,8 @@
 #include "splat/eye.h"
 #include "splat/kdtree.h"
 
-// The occluder and sample steps have sixteen-lane AVX-512 paths, chosen at run time
-// (kdtree_traverse_avx512.cpp).
+// The reach test, a brick's candidate occluders and the sweep's reads have sixteen-lane AVX-512
+// paths, chosen at run time (kdtree_traverse_avx512.cpp).
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define RS_TRAVERSE_AVX512 1
 #else

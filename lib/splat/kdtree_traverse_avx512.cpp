@@ -224,9 +224,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
                                                             _MM_CMPINT_LT);
         if (reached & ~inMask) {
             // A block at the mask's edge: the scalar tests, sample by sample.
-            size_t e0 = n, f0 = free;
-            gatherSampleScalar(e, i, i + uint32_t(count), e0, f0, sliceMin, sliceMax);
-            n = e0, free = f0;
+            gatherSampleScalar(e, i, i + uint32_t(count), n, free, sliceMin, sliceMax);
             continue;
         }
         // The slices, and the shadowable map's first slice of each block (a 16-bit cell; the map
