@@ -181,14 +181,6 @@ bool CylinderTraversal::descend(StackEntry& e, Node node) {
     return true;
 }
 
-// Asks for the cache lines of a brick's part of a per-sample array: the tree's samples are
-// reached from all over the array, and waiting for them was the traversal's largest cost.
-template <class T>
-static void prefetchSamples(const std::vector<T>& v, const Brick& brick) {
-    const char* end = reinterpret_cast<const char*>(v.data() + brick.firstSample + brick.sampleCount);
-    for (const char* q = reinterpret_cast<const char*>(v.data() + brick.firstSample); q < end; q += 64)
-        __builtin_prefetch(q);
-}
 
 // Whether every voxel of `bits` (a brick's, min corner e.lo) lies behind the origin's tangent
 // plane as inFrontOfTangent decides it, (centre − o)·n ≤ ½‖n‖₁: the box of their centres does, with
@@ -221,7 +213,7 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         Vec3 lo, hi;
         brick.sampleBounds(Vec3(e.lo[0], e.lo[1], e.lo[2]), lo, hi);
         if (boxMayBeReached(lo, hi)) {
-            prefetchSamples(eye_.position, brick);  // wanted in visitSamples: no waiting then
+            prefetchRange(eye_.position, brick.firstSample, brick.firstSample + brick.sampleCount);  // wanted in visitSamples: no waiting then
             s_.bricks.push_back({e, index});
         }
     }
@@ -326,7 +318,7 @@ inline int CylinderTraversal::firstShadowingSlice(int i0, int j0) const {
 
 // A met brick's samples, by octant: each octant's part of the box its samples lie in is tested
 // first (boxMayBeReached; gatherBrick tested the whole box), so that what the cylinder cannot
-// reach is not read; what the splat reads of a reached sample is asked for first. A box whose
+// reach is not read. A box whose
 // samples are all surely reached and unshadowed (boxSurelyUnshadowed), an octant's (the whole
 // brick's when it is not divided), goes to the unshadowed list without its positions being
 // read: the list is the same, in the same order, as when each sample is tested. (A test of the
@@ -336,8 +328,6 @@ void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
     Vec3 lo, hi;
     brick.sampleBounds(corner, lo, hi);
-    prefetchSamples(eye_.normal, brick), prefetchSamples(eye_.geomNormal, brick), prefetchSamples(eye_.bsdf, brick),
-        prefetchSamples(eye_.pixel, brick);
     // Room for all the brick's samples in both lists (and kEventSlack entries more, for the wide
     // path's whole-vector stores), made once; each part writes at the lists' ends (n, listed)
     // and the lists are cut to them at the end.

@@ -6,7 +6,8 @@
 //          V = 1 − occlusion is > 0, in no particular order. The splat stage does its own
 //          kernel weight and normal tests; samples with V = 0 are not handed over. A visitor
 //          that can also be called as visit(const uint32_t* index, size_t count) gets the
-//          samples with V = 1 that way, a brick's at a time.
+//          samples with V = 1 that way, a brick's at a time; one that can be called as
+//          visit(SamplesAhead) is told which samples may come next, before they are tested.
 // Space:   voxel space; the cylinder axis is o + tω, t ∈ [0, L], radius h.
 //
 // Definitions (the brute force in tests/kdtree_test.cpp implements the same independently):
@@ -180,6 +181,21 @@ struct UninitializedAllocator : std::allocator<T> {
 };
 template <class T>
 using EventVector = std::vector<T, UninitializedAllocator<T>>;
+
+// Asks for the cache lines of elements [first, last) of a per-sample array: the tree's samples
+// are reached from all over the arrays, and waiting for them was the traversal's largest cost.
+template <class T>
+inline void prefetchRange(const std::vector<T>& v, uint32_t first, uint32_t last) {
+    const char* end = reinterpret_cast<const char*>(v.data() + last);
+    for (const char* q = reinterpret_cast<const char*>(v.data() + first); q < end; q += 64) __builtin_prefetch(q);
+}
+
+// What a visitor that can be called as visit(SamplesAhead) is told before a brick's reached
+// samples are looked for: they are among [first, last), so that it can ask for what it will
+// read of them while the traversal tests them (the splat's normals, BSDFs and pixels).
+struct SamplesAhead {
+    uint32_t first, last;
+};
 
 // A visitor of several callables (one per kind of call, as std::visit's examples build it).
 template <class... Fns>
@@ -401,6 +417,10 @@ template <class Visit>
 void CylinderTraversal::visitSamples(Visit&& visit) {
     markShadowable();
     for (const kd_detail::MetBrick& met : s_.bricks) {
+        if constexpr (std::is_invocable_v<Visit&, SamplesAhead>) {
+            const Brick& brick = tree_.bricks[met.brick];
+            visit(SamplesAhead{brick.firstSample, brick.firstSample + brick.sampleCount});
+        }
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
             visit(static_cast<const uint32_t*>(s_.unshadowed.data()), s_.unshadowed.size());

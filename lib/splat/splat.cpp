@@ -287,6 +287,12 @@ public:
 #endif
     }
 
+    // What receive reads of the samples that may come next, asked for while the traversal tests them.
+    void prefetch(SamplesAhead ahead) const {
+        prefetchRange(samples_.normal, ahead.first, ahead.last), prefetchRange(samples_.geomNormal, ahead.first, ahead.last);
+        prefetchRange(samples_.bsdf, ahead.first, ahead.last), prefetchRange(samples_.pixel, ahead.first, ahead.last);
+    }
+
     // One sample, whose visibility by the mask is `visibility` (with batches: gathered four at
     // a time for receive4).
     void receive(uint32_t i, float visibility) {
@@ -529,7 +535,8 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
             PhotonSplat splat(accel, samples, ray, settings, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
             traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
-                                        [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); }},
+                                        [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
+                                        [&](SamplesAhead ahead) { splat.prefetch(ahead); }},
                              &stats[thread].traversal);
             splat.finish();
         }
