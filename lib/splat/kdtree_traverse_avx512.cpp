@@ -192,7 +192,10 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         c[a] = _mm512_load_si512(kDeinterleave.c[a]);
     }
     const uint16_t* shadow = shadow_;
-    alignas(64) int32_t slices[16];
+    // The brick's voxel layers along N (at most kBrickSize) and their slices.
+    const int layers = std::min(layerHi - layerLo + 1, kBrickSize);
+    int layerSlice[kBrickSize], perLayer[kBrickSize] = {};
+    for (int l = 0; l < layers; ++l) layerSlice[l] = sliceOf(layerLo + l);
     for (uint32_t i = first; i < last; i += 16) {
         // The group's positions, the floats past `last` not read (a masked load does not fault).
         const int count = int(std::min<uint32_t>(16u, last - i));
@@ -258,13 +261,16 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         _mm512_storeu_si512(out + 4, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(3, 1, 3, 1)));
         _mm512_storeu_si512(out + 8, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(2, 0, 2, 0)));
         _mm512_storeu_si512(out + 12, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(3, 1, 3, 1)));
-        _mm512_store_si512(slices, cs);
-        const int made = __builtin_popcount(shadowed);
-        for (int k = 0; k < made; ++k) {
-            ++s_.sampleSlices[size_t(slices[k])];
-            sliceMin = std::min(sliceMin, slices[k]), sliceMax = std::max(sliceMax, slices[k]);
-        }
-        n += size_t(made);
+        // Per voxel layer of the brick, how many events it got (in registers: the same count
+        // added to one cell sample by sample would wait on its own stores).
+        for (int l = 0; l < layers; ++l)
+            perLayer[l] += __builtin_popcount(_mm512_mask_cmp_epi32_mask(shadowed, slice, _mm512_set1_epi32(layerSlice[l]), _MM_CMPINT_EQ));
+        n += size_t(__builtin_popcount(shadowed));
+    }
+    for (int l = 0; l < layers; ++l) {
+        if (!perLayer[l]) continue;
+        s_.sampleSlices[size_t(layerSlice[l])] += uint32_t(perLayer[l]);
+        sliceMin = std::min(sliceMin, layerSlice[l]), sliceMax = std::max(sliceMax, layerSlice[l]);
     }
     sliceMin_ = sliceMin, sliceMax_ = sliceMax;
     st_.samplesReached += n + free - events - listed;
