@@ -188,9 +188,16 @@ int main(int argc, char** argv) {
                 Timer t;
                 p.parallelFor(int64_t(n), 256, [&](int64_t b, int64_t e, int thread) {
                     double sum = 0;
+                    // The visitor takes the lists the splat takes (their V summed for the checksum).
+                    auto visit = Overloaded{[&](uint32_t, float v) { sum += v; },
+                                            [&](const uint32_t*, size_t count) { sum += double(count); },
+                                            [&](const uint32_t*, const float* v, size_t count) {
+                                                float s = 0.f;
+                                                for (size_t k = 0; k < count; ++k) s += v[k];
+                                                sum += s;
+                                            }};
                     for (int64_t i = b; i < e; ++i)
-                        traverseCylinder(tree, samples, cylinders[size_t(i)], scratch[size_t(thread)],
-                                         [&](uint32_t, float v) { sum += v; }, &stats[size_t(thread)]);
+                        traverseCylinder(tree, samples, cylinders[size_t(i)], scratch[size_t(thread)], visit, &stats[size_t(thread)]);
                     sums[size_t(thread)] += sum;
                 });
                 rate[mode][run] = double(n) / t.seconds();

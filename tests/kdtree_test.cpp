@@ -531,8 +531,9 @@ TEST(OcclusionTreeTraversal, BoxesTakenWholeMatchBruteForceOnSurfaces) {
 
 // The sixteen-lane sample step (CPUs with AVX-512) against the four-lane one: the same visits,
 // in the same order, with the same V to the bit, on random grids (random points, ranges of every
-// length) and on surfaces leaving and meeting walls. The brute-force tests above check
-// whichever path this CPU takes.
+// length) and on surfaces leaving and meeting walls. On each path a visitor of lists (as the
+// splat's) gets the same visits as one taking them one by one. The brute-force tests above
+// check whichever path this CPU takes.
 TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
     if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
     std::mt19937 rng(91);
@@ -566,6 +567,31 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
             for (int wide = 0; wide < 2; ++wide) {
                 ASSERT_TRUE(setTraversalWide(wide == 1));
                 traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { seen[wide].push_back({i, v}); });
+                // A visitor of lists (as the splat's) gets the same visits in the same order, each
+                // among the samples it was told of before.
+                std::vector<std::pair<uint32_t, float>> listed;
+                std::vector<bool> announced(samples.size(), false);
+                auto check = [&](uint32_t i, float v) {
+                    EXPECT_TRUE(announced[i]) << "sample " << i << " visited before it was announced";
+                    listed.push_back({i, v});
+                };
+                traverseCylinder(tree, samples, cyl, scratch,
+                                 Overloaded{[&](uint32_t i, float v) { check(i, v); },
+                                            [&](const uint32_t* index, size_t count) {
+                                                for (size_t k = 0; k < count; ++k) check(index[k], 1.f);
+                                            },
+                                            [&](const uint32_t* index, const float* v, size_t count) {
+                                                EXPECT_LE(count, 16u);
+                                                for (size_t k = 0; k < count; ++k) check(index[k], v[k]);
+                                            },
+                                            [&](SamplesAhead ahead) {
+                                                for (uint32_t i = ahead.first; i < ahead.last; ++i) announced[i] = true;
+                                            }});
+                ASSERT_EQ(listed.size(), seen[wide].size()) << "scene " << scene << " cylinder " << c;
+                for (size_t k = 0; k < listed.size(); ++k) {
+                    ASSERT_EQ(listed[k].first, seen[wide][k].first) << "scene " << scene << " cylinder " << c << " visit " << k;
+                    ASSERT_EQ(std::memcmp(&listed[k].second, &seen[wide][k].second, sizeof(float)), 0);
+                }
             }
             ASSERT_EQ(seen[0].size(), seen[1].size()) << "scene " << scene << " cylinder " << c;
             for (size_t k = 0; k < seen[0].size(); ++k) {

@@ -7,6 +7,8 @@
 //          kernel weight and normal tests; samples with V = 0 are not handed over. A visitor
 //          that can also be called as visit(const uint32_t* index, size_t count) gets the
 //          samples with V = 1 that way, a brick's at a time; one that can be called as
+//          visit(const uint32_t* index, const float* V, size_t count) gets the others that
+//          way, up to sixteen at a time; one that can be called as
 //          visit(SamplesAhead) is told which samples may come next, before they are tested.
 // Space:   voxel space; the cylinder axis is o + tω, t ∈ [0, L], radius h.
 //
@@ -321,8 +323,10 @@ private:
     float read(const SampleEvent& ev) const;
     void read4(const SampleEvent* ev, float vis[4]) const;
 #if RS_TRAVERSE_AVX512
-    void read16(const SampleEvent* ev, int count, float vis[16]) const;
+    int read16(const SampleEvent* ev, int count, uint32_t index[16], float vis[16]) const;
 #endif
+    template <class Visit>
+    void handOver(Visit& visit, const uint32_t* index, const float* vis, int count);
 
     const OcclusionTree& tree_;
     const EyeSamples& eye_;
@@ -443,26 +447,42 @@ void CylinderTraversal::sweep(Visit&& visit) {
         if (sixteen_)
             while (is < end) {
                 const int count = int(std::min<size_t>(16, end - is));
+                alignas(64) uint32_t index[16];
                 alignas(64) float vis[16];
-                read16(&samples[is], count, vis);
-                for (int k = 0; k < count; ++k, ++is)
-                    if (vis[k] > 0.f) visit(samples[is].index, vis[k]), ++st_.samplesVisited;
+                handOver(visit, index, vis, read16(&samples[is], count, index, vis));
+                is += size_t(count);
             }
 #endif
 #if defined(__SSE2__)
         for (; is + 4 <= end; is += 4) {
             alignas(16) float vis[4];
             read4(&samples[is], vis);
+            uint32_t index[4];
+            float seen[4];
+            int lit = 0;
             for (int k = 0; k < 4; ++k)
-                if (vis[k] > 0.f) visit(samples[is + size_t(k)].index, vis[k]), ++st_.samplesVisited;
+                if (vis[k] > 0.f) index[lit] = samples[is + size_t(k)].index, seen[lit++] = vis[k];
+            handOver(visit, index, seen, lit);
         }
 #endif
         for (; is < end; ++is) {
             const float vis = read(samples[is]);
-            if (vis > 0.f) visit(samples[is].index, vis), ++st_.samplesVisited;
+            if (vis > 0.f) handOver(visit, &samples[is].index, &vis, 1);
         }
         for (; io < occluders.size() && occluders[io].slice == slice; ++io) s_.sweep[size_t(occluders[io].cell)] += occluders[io].occ;
     }
+}
+
+// The samples of one read that see light (V > 0), handed over as a list when the visitor takes
+// lists, else one by one.
+template <class Visit>
+void CylinderTraversal::handOver(Visit& visit, const uint32_t* index, const float* vis, int count) {
+    if constexpr (std::is_invocable_v<Visit&, const uint32_t*, const float*, size_t>) {
+        if (count > 0) visit(index, vis, size_t(count));
+    } else {
+        for (int k = 0; k < count; ++k) visit(index[k], vis[k]);
+    }
+    st_.samplesVisited += uint64_t(count);
 }
 
 template <class Visit>

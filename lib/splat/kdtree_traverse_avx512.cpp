@@ -281,8 +281,10 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
 // read() for `count` (1…16) consecutive sample events, lane by lane the same operations in the
 // same order (so the same values): the events' u and v turned to lanes, each block's two cell
 // pairs and its rows' valid ranges (lo₀ hi₀ lo₁ hi₁, side by side) read eight lanes at a time
-// as 64-bit pairs.
-__attribute__((target("avx512f"))) void CylinderTraversal::read16(const SampleEvent* ev, int count, float vis[16]) const {
+// as 64-bit pairs. Writes the index and V of the events with V > 0, in event order, and returns
+// how many.
+__attribute__((target("avx512f"))) int CylinderTraversal::read16(const SampleEvent* ev, int count, uint32_t index[16],
+                                                                   float vis[16]) const {
     static_assert(sizeof(SampleEvent) == 16, "an event is four floats: index, slice, u, v");
     const float* f = reinterpret_cast<const float*>(ev);
     const __m512 e0 = _mm512_maskz_loadu_ps(firstLanes(4 * count), f), e1 = _mm512_maskz_loadu_ps(firstLanes(4 * count - 16), f + 16);
@@ -300,8 +302,12 @@ __attribute__((target("avx512f"))) void CylinderTraversal::read16(const SampleEv
     const __mmask16 inside = _mm512_mask_cmp_epu32_mask(_mm512_cmp_epu32_mask(i0, _mm512_set1_epi32(sizeU_ - 1), _MM_CMPINT_LT), j0,
                                                         _mm512_set1_epi32(sizeV_ - 1), _MM_CMPINT_LT);
     if (active & ~inside) {
-        for (int k = 0; k < count; ++k) vis[k] = read(ev[k]);  // a block at the mask's edge (none, by its size)
-        return;
+        int lit = 0;  // a block at the mask's edge (none, by its size)
+        for (int k = 0; k < count; ++k) {
+            const float v = read(ev[k]);
+            if (v > 0.f) index[lit] = ev[k].index, vis[lit++] = v;
+        }
+        return lit;
     }
     // 64-bit reads, eight lanes at a time: the cells (c, c + 1) of rows j0 and j0 + 1, and the
     // ranges (lo, hi) of rows j0 and j0 + 1; then the pairs split into lanes.
@@ -322,8 +328,17 @@ __attribute__((target("avx512f"))) void CylinderTraversal::read16(const SampleEv
     // (t0 + t2) + (t1 + t3), as read() adds its lanes.
     const __m512 num = _mm512_add_ps(_mm512_add_ps(cellTerm(w0, c00), cellTerm(w2, c01)), _mm512_add_ps(cellTerm(w1, c10), cellTerm(w3, c11)));
     const __m512 den = _mm512_add_ps(_mm512_add_ps(w0, w2), _mm512_add_ps(w1, w3));
-    const __mmask16 lit = _mm512_cmp_ps_mask(num, _mm512_setzero_ps(), _CMP_GT_OS);
-    _mm512_storeu_ps(vis, _mm512_mask_sub_ps(one, lit, one, _mm512_mask_div_ps(one, lit, num, den)));
+    const __mmask16 shadowed = _mm512_cmp_ps_mask(num, _mm512_setzero_ps(), _CMP_GT_OS);
+    const __m512 seen = _mm512_mask_sub_ps(one, shadowed, one, _mm512_mask_div_ps(one, shadowed, num, den));
+    // The events' indices (float 4l of the pair of vectors, lanes 0-7 of each permute), and
+    // the lanes that see light, compressed.
+    const __m512i indexOf = _mm512_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28, 0, 4, 8, 12, 16, 20, 24, 28);
+    const __m512i lowIndex = _mm512_permutex2var_epi32(_mm512_castps_si512(e0), indexOf, _mm512_castps_si512(e1));
+    const __m512i highIndex = _mm512_permutex2var_epi32(_mm512_castps_si512(e2), indexOf, _mm512_castps_si512(e3));
+    const __mmask16 lit = _mm512_mask_cmp_ps_mask(active, seen, _mm512_setzero_ps(), _CMP_GT_OS);
+    _mm512_store_si512(index, _mm512_maskz_compress_epi32(lit, _mm512_shuffle_i32x4(lowIndex, highIndex, _MM_SHUFFLE(1, 0, 1, 0))));
+    _mm512_store_ps(vis, _mm512_maskz_compress_ps(lit, seen));
+    return __builtin_popcount(lit);
 }
 
 #endif

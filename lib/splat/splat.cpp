@@ -338,6 +338,19 @@ public:
         }
     }
 
+    // Samples the mask gives V > 0: the same as receive(index[k], visibility[k]) for each, whole
+    // fours taken straight from the lists where SSE is there.
+    void receiveSeen(const uint32_t* index, const float* visibility, size_t count) {
+        size_t k = 0;
+#if defined(__SSE2__)
+        if (visibility_ && batches_) {
+            while (waitingCount_ > 0 && k < count) receive(index[k], visibility[k]), ++k;  // the waiting four first
+            for (; k + 4 <= count; k += 4) receive4(index + k, visibility + k, 4);
+        }
+#endif
+        for (; k < count; ++k) receive(index[k], visibility[k]);
+    }
+
     // Samples the mask leaves wholly visible (V = 1): the same as receive(i, 1) for each, four
     // at a time where SSE is there.
     void receiveUnshadowed(const uint32_t* index, size_t count) {
@@ -536,6 +549,9 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
             traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
+                                        [&](const uint32_t* index, const float* visibility, size_t count) {
+                                            splat.receiveSeen(index, visibility, count);
+                                        },
                                         [&](SamplesAhead ahead) { splat.prefetch(ahead); }},
                              &stats[thread].traversal);
             splat.finish();
