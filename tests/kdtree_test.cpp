@@ -531,9 +531,8 @@ TEST(OcclusionTreeTraversal, BoxesTakenWholeMatchBruteForceOnSurfaces) {
 
 // The sixteen-lane sample step (CPUs with AVX-512) against the four-lane one: the same visits,
 // in the same order, with the same V to the bit, on random grids (random points, ranges of every
-// length) and on surfaces leaving and meeting walls. On each path a visitor of lists (as the
-// splat's) gets the same visits as one taking them one by one. The brute-force tests above
-// check whichever path this CPU takes.
+// length) and on surfaces leaving and meeting walls. The brute-force tests above check
+// whichever path this CPU takes.
 TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
     if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
     std::mt19937 rng(91);
@@ -567,31 +566,6 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
             for (int wide = 0; wide < 2; ++wide) {
                 ASSERT_TRUE(setTraversalWide(wide == 1));
                 traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { seen[wide].push_back({i, v}); });
-                // A visitor of lists (as the splat's) gets the same visits in the same order, each
-                // among the samples it was told of before.
-                std::vector<std::pair<uint32_t, float>> listed;
-                std::vector<bool> announced(samples.size(), false);
-                auto check = [&](uint32_t i, float v) {
-                    EXPECT_TRUE(announced[i]) << "sample " << i << " visited before it was announced";
-                    listed.push_back({i, v});
-                };
-                traverseCylinder(tree, samples, cyl, scratch,
-                                 Overloaded{[&](uint32_t i, float v) { check(i, v); },
-                                            [&](const uint32_t* index, size_t count) {
-                                                for (size_t k = 0; k < count; ++k) check(index[k], 1.f);
-                                            },
-                                            [&](const uint32_t* index, const float* v, size_t count) {
-                                                EXPECT_LE(count, 16u);
-                                                for (size_t k = 0; k < count; ++k) check(index[k], v[k]);
-                                            },
-                                            [&](SamplesAhead ahead) {
-                                                for (uint32_t i = ahead.first; i < ahead.last; ++i) announced[i] = true;
-                                            }});
-                ASSERT_EQ(listed.size(), seen[wide].size()) << "scene " << scene << " cylinder " << c;
-                for (size_t k = 0; k < listed.size(); ++k) {
-                    ASSERT_EQ(listed[k].first, seen[wide][k].first) << "scene " << scene << " cylinder " << c << " visit " << k;
-                    ASSERT_EQ(std::memcmp(&listed[k].second, &seen[wide][k].second, sizeof(float)), 0);
-                }
             }
             ASSERT_EQ(seen[0].size(), seen[1].size()) << "scene " << scene << " cylinder " << c;
             for (size_t k = 0; k < seen[0].size(); ++k) {
@@ -607,6 +581,74 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
     EXPECT_GT(visits, 20000u);  // not vacuous
     EXPECT_GT(partial, 1000u);
     std::printf("  %zu visits (%zu partly occluded) the same on both paths\n", visits, partial);
+}
+
+// A visitor of lists (as the splat's: V = 1 a brick at a time, the swept samples that see light
+// a read at a time, the samples ahead announced) gets the same visits, in the same order, with
+// the same V to the bit, as one taking them one by one; and each after it was told of it. On
+// every path this CPU has.
+TEST(OcclusionTreeTraversal, VisitorOfListsGetsTheSameVisits) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    ThreadPool pool(2);
+    TraversalScratch scratch;
+    const IVec3 dims(40, 36, 44);
+    OcclusionGrid grid = randomGrid(rng, dims, 0.03f);
+    std::vector<Vec3> points = randomPoints(rng, dims, 12000);
+    for (int i = 0; i < 12000; ++i) points.push_back(Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z));  // a floor
+    EyeSamples samples = makeSamples(grid.geometry, points);
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+    size_t visits = 0, lists = 0, partial = 0;
+    for (int wide = 0; wide < 2; ++wide) {
+        if (!setTraversalWide(wide == 1)) continue;  // no AVX-512: the four-lane path only
+        for (int c = 0; c < 60; ++c) {
+            Cylinder cyl;
+            cyl.dir = randomDirection(rng);
+            if (c % 2 == 0) {  // leaving the floor
+                cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
+                cyl.originNormal = Vec3(0.f, 1.f, 0.f);
+                if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
+            } else {
+                cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
+            }
+            cyl.radius = 0.5f + u01(rng) * 8.f;
+            cyl.length = u01(rng) * 60.f;
+            std::vector<std::pair<uint32_t, float>> single, listed;
+            traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { single.push_back({i, v}); });
+            std::vector<bool> announced(samples.size(), false);
+            auto take = [&](uint32_t i, float v) {
+                EXPECT_TRUE(announced[i]) << "sample " << i << " visited before it was announced";
+                listed.push_back({i, v});
+            };
+            traverseCylinder(tree, samples, cyl, scratch,
+                             Overloaded{[&](uint32_t i, float v) { take(i, v); },
+                                        [&](const uint32_t* index, size_t count) {
+                                            for (size_t k = 0; k < count; ++k) take(index[k], 1.f);
+                                        },
+                                        [&](const uint32_t* index, const float* v, size_t count) {
+                                            EXPECT_GE(count, 1u);
+                                            EXPECT_LE(count, 16u);
+                                            for (size_t k = 0; k < count; ++k) take(index[k], v[k]);
+                                            ++lists;
+                                        },
+                                        [&](SamplesAhead ahead) {
+                                            for (uint32_t i = ahead.first; i < ahead.last; ++i) announced[i] = true;
+                                        }});
+            ASSERT_EQ(listed.size(), single.size()) << "path " << wide << " cylinder " << c;
+            for (size_t k = 0; k < listed.size(); ++k) {
+                ASSERT_EQ(listed[k].first, single[k].first) << "path " << wide << " cylinder " << c << " visit " << k;
+                ASSERT_EQ(std::memcmp(&listed[k].second, &single[k].second, sizeof(float)), 0)
+                    << "path " << wide << " cylinder " << c << " sample " << single[k].first;
+                partial += single[k].second < 1.f;
+            }
+            visits += single.size();
+        }
+    }
+    setTraversalWide(true);
+    EXPECT_GT(visits, 10000u);  // not vacuous
+    EXPECT_GT(partial, 500u);
+    EXPECT_GT(lists, 100u);
+    std::printf("  %zu visits (%zu partly occluded, in %zu lists) the same one by one and as lists\n", visits, partial, lists);
 }
 
 namespace {

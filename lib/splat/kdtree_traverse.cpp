@@ -181,7 +181,6 @@ bool CylinderTraversal::descend(StackEntry& e, Node node) {
     return true;
 }
 
-
 // Whether every voxel of `bits` (a brick's, min corner e.lo) lies behind the origin's tangent
 // plane as inFrontOfTangent decides it, (centre − o)·n ≤ ½‖n‖₁: the box of their centres does, with
 // a margin above the rounding, so that no voxel the per-voxel test would keep is skipped.
@@ -213,7 +212,8 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         Vec3 lo, hi;
         brick.sampleBounds(Vec3(e.lo[0], e.lo[1], e.lo[2]), lo, hi);
         if (boxMayBeReached(lo, hi)) {
-            prefetchRange(eye_.position, brick.firstSample, brick.firstSample + brick.sampleCount);  // wanted in visitSamples: no waiting then
+            // The positions, wanted in visitSamples: no waiting then.
+            prefetchRange(eye_.position, brick.firstSample, brick.firstSample + brick.sampleCount);
             s_.bricks.push_back({e, index});
         }
     }
@@ -318,10 +318,10 @@ inline int CylinderTraversal::firstShadowingSlice(int i0, int j0) const {
 
 // A met brick's samples, by octant: each octant's part of the box its samples lie in is tested
 // first (boxMayBeReached; gatherBrick tested the whole box), so that what the cylinder cannot
-// reach is not read. A box whose
-// samples are all surely reached and unshadowed (boxSurelyUnshadowed), an octant's (the whole
-// brick's when it is not divided), goes to the unshadowed list without its positions being
-// read: the list is the same, in the same order, as when each sample is tested. (A test of the
+// reach is not read. A box whose samples are all surely reached and unshadowed
+// (boxSurelyUnshadowed), an octant's (the whole brick's when it is not divided), goes to the
+// unshadowed list without its positions being read: the list is the same, in the same order,
+// as when each sample is tested. (A test of the
 // whole divided brick first rarely passed and cost more than it saved.)
 void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     const Brick& brick = tree_.bricks[met.brick];
