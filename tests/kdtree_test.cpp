@@ -529,6 +529,28 @@ TEST(OcclusionTreeTraversal, BoxesTakenWholeMatchBruteForceOnSurfaces) {
                 size_t(stats.samplesBoxed), total.partial);
 }
 
+namespace {
+
+// A random cylinder of radius 0.5 + U(0, spread) and length U(0, 60): leaving the floor y = 3.37
+// (normal +y, into the upper half-space) when `fromFloor`, else from anywhere in the grid.
+Cylinder floorOrFreeCylinder(std::mt19937& rng, IVec3 dims, bool fromFloor, float spread) {
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    Cylinder cyl;
+    cyl.dir = randomDirection(rng);
+    if (fromFloor) {
+        cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
+        cyl.originNormal = Vec3(0.f, 1.f, 0.f);
+        if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
+    } else {
+        cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
+    }
+    cyl.radius = 0.5f + u01(rng) * spread;
+    cyl.length = u01(rng) * 60.f;
+    return cyl;
+}
+
+}  // namespace
+
 // The sixteen-lane sample step (CPUs with AVX-512) against the four-lane one: the same visits,
 // in the same order, with the same V to the bit, on random grids (random points, ranges of every
 // length) and on surfaces leaving and meeting walls. The brute-force tests above check
@@ -551,17 +573,7 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
         EyeSamples samples = makeSamples(grid.geometry, points);
         OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
         for (int c = 0; c < 60; ++c) {
-            Cylinder cyl;
-            cyl.dir = randomDirection(rng);
-            if (c % 3 == 0) {  // leaving the floor
-                cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
-                cyl.originNormal = Vec3(0.f, 1.f, 0.f);
-                if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
-            } else {
-                cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
-            }
-            cyl.radius = 0.5f + u01(rng) * (c % 2 ? 10.f : 3.f);
-            cyl.length = u01(rng) * 60.f;
+            const Cylinder cyl = floorOrFreeCylinder(rng, dims, c % 3 == 0, c % 2 ? 10.f : 3.f);
             std::vector<std::pair<uint32_t, float>> seen[2];
             for (int wide = 0; wide < 2; ++wide) {
                 ASSERT_TRUE(setTraversalWide(wide == 1));
@@ -602,17 +614,7 @@ TEST(OcclusionTreeTraversal, VisitorOfListsGetsTheSameVisits) {
     for (int wide = 0; wide < 2; ++wide) {
         if (!setTraversalWide(wide == 1)) continue;  // no AVX-512: the four-lane path only
         for (int c = 0; c < 60; ++c) {
-            Cylinder cyl;
-            cyl.dir = randomDirection(rng);
-            if (c % 2 == 0) {  // leaving the floor
-                cyl.origin = Vec3(u01(rng) * dims.x, 3.37f, u01(rng) * dims.z);
-                cyl.originNormal = Vec3(0.f, 1.f, 0.f);
-                if (cyl.dir.y < 0.f) cyl.dir.y = -cyl.dir.y;
-            } else {
-                cyl.origin = Vec3(u01(rng) * dims.x, u01(rng) * dims.y, u01(rng) * dims.z);
-            }
-            cyl.radius = 0.5f + u01(rng) * 8.f;
-            cyl.length = u01(rng) * 60.f;
+            const Cylinder cyl = floorOrFreeCylinder(rng, dims, c % 2 == 0, 8.f);
             std::vector<std::pair<uint32_t, float>> single, listed;
             traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { single.push_back({i, v}); });
             std::vector<bool> announced(samples.size(), false);

@@ -321,8 +321,8 @@ inline int CylinderTraversal::firstShadowingSlice(int i0, int j0) const {
 // reach is not read. A box whose samples are all surely reached and unshadowed
 // (boxSurelyUnshadowed), an octant's (the whole brick's when it is not divided), goes to the
 // unshadowed list without its positions being read: the list is the same, in the same order,
-// as when each sample is tested. (A test of the
-// whole divided brick first rarely passed and cost more than it saved.)
+// as when each sample is tested. (A test of the whole divided brick first rarely passed and
+// cost more than it saved.)
 void CylinderTraversal::gatherBrickSamples(const MetBrick& met) {
     const Brick& brick = tree_.bricks[met.brick];
     const Vec3 corner(met.entry.lo[0], met.entry.lo[1], met.entry.lo[2]);
