@@ -128,11 +128,16 @@ void CylinderTraversal::findValidRows() {
 
 // -- Gathering occluders and samples (§5.1–5.3) ----------------------------------------------
 
-// From the root, the part of [0, L] whose disc boxes touch the grid, near child first.
+// From the root, the part of [0, L] whose disc boxes touch the grid, near child first. The
+// leaves are worked on kLeafLag leaves after the walk meets them, in the same order, their
+// payloads asked for when met: a brick's payload is then in cache when gatherBrick reads it
+// (read at once, half of gatherBrick's time was the wait for its first line).
 void CylinderTraversal::gather() {
     StackEntry e{0, 0.f, L_, {0, 0, 0}, {uint16_t(g_.dims.x), uint16_t(g_.dims.y), uint16_t(g_.dims.z)}};
     clipToBox(o_, w_, r_, Vec3(0.f), Vec3(g_.dims), e.t0, e.t1);
     s_.stack.clear();
+    MetLeaf lag[kLeafLag];
+    unsigned met = 0, done = 0;  // leaves met, leaves worked on
     // The near child is worked on next without going through the stack (a stored entry read
     // right back waits for the store); only far children are pushed.
     bool next = e.t0 <= e.t1;
@@ -148,16 +153,25 @@ void CylinderTraversal::gather() {
             next = descend(e, node);
             continue;
         }
-        if (!s_.stack.empty()) prefetchNode(s_.stack.back().node);
-        if (node.type() == NodeType::Brick) gatherBrick(e, node.brick());
-        else if (node.type() == NodeType::Occlusion) gatherOcclusionBlock(e, node);
+        if (node.type() == NodeType::Empty) continue;
+        if (node.type() == NodeType::Brick) prefetchBrick(node.brick());
+        if (met - done == kLeafLag) gatherLeaf(lag[done++ % kLeafLag]);
+        lag[met++ % kLeafLag] = {e, node};
     }
+    while (done != met) gatherLeaf(lag[done++ % kLeafLag]);
 }
 
-// The node that comes next: a brick's payload is asked for while this one is worked on.
-void CylinderTraversal::prefetchNode(uint32_t index) const {
-    const Node node = tree_.nodes[index];
-    if (node.type() == NodeType::Brick) __builtin_prefetch(&tree_.bricks[node.brick()]);
+// Both cache lines of a brick's payload.
+void CylinderTraversal::prefetchBrick(uint32_t index) const {
+    const char* p = reinterpret_cast<const char*>(&tree_.bricks[index]);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + sizeof(Brick) - 1);
+}
+
+// A met leaf's occluders (and, for a brick, whether its samples may be reached).
+void CylinderTraversal::gatherLeaf(const MetLeaf& leaf) {
+    if (leaf.node.type() == NodeType::Brick) gatherBrick(leaf.entry, leaf.node.brick());
+    else gatherOcclusionBlock(leaf.entry, leaf.node);
 }
 
 // Shrink the cylinder bounds to each child: the far child goes on the stack, the near one

@@ -264,7 +264,13 @@ private:
 
     // Gathering.
     bool descend(StackEntry& e, Node node);
-    void prefetchNode(uint32_t index) const;
+    struct MetLeaf {
+        StackEntry entry;
+        Node node;
+    };
+    static constexpr unsigned kLeafLag = 8;  // leaves met before the first is worked on
+    void prefetchBrick(uint32_t index) const;
+    void gatherLeaf(const MetLeaf& leaf);
     void gatherBrick(const StackEntry& e, uint32_t index);
 #if RS_TRAVERSE_AVX512
     void gatherBrickOccluders16(const StackEntry& e, const Brick& brick, uint64_t candidates);
