@@ -108,6 +108,61 @@ __attribute__((target("avx512f"))) inline __m512 cellTerm(__m512 w, __m512i c) {
     return _mm512_mul_ps(w, _mm512_min_ps(_mm512_set1_ps(1.f), _mm512_castsi512_ps(c)));
 }
 
+// The positions of `count` (1…16) consecutive samples in lanes, in voxel space (p) and from
+// the cylinder's origin (d = p − o), as reach() makes them: three masked loads (the floats past
+// the last sample not read; a masked load does not fault) deinterleaved by two permutes each.
+struct SampleLanes {
+    __m512 p[3], d[3];
+};
+__attribute__((target("avx512f"), always_inline)) inline SampleLanes loadSamples16(const float* f, int count,
+                                                                                   const __m512 origin[3], __m512 invVoxel,
+                                                                                   const __m512 o[3], const __m512i ab[3],
+                                                                                   const __m512i c[3]) {
+    const __m512 va = _mm512_maskz_loadu_ps(firstLanes(3 * count), f);
+    const __m512 vb = _mm512_maskz_loadu_ps(firstLanes(3 * count - 16), f + 16);
+    const __m512 vc = _mm512_maskz_loadu_ps(firstLanes(3 * count - 32), f + 32);
+    SampleLanes s;
+    for (int a = 0; a < 3; ++a) {
+        const __m512 world = _mm512_permutex2var_ps(_mm512_permutex2var_ps(va, ab[a], vb), c[a], vc);
+        s.p[a] = _mm512_mul_ps(_mm512_sub_ps(world, origin[a]), invVoxel);
+        s.d[a] = _mm512_sub_ps(s.p[a], o[a]);
+    }
+    return s;
+}
+
+// reach()'s tests for the `lanes` given: depth in (0, L], distance to the axis line < h, and,
+// where the origin has a normal n (else null), in front of its tangent plane.
+__attribute__((target("avx512f"), always_inline)) inline __mmask16 reachLanes16(__mmask16 lanes, const __m512 d[3],
+                                                                                const __m512 w[3], __m512 length,
+                                                                                __m512 kernel2, const __m512* n) {
+    const __m512 zero = _mm512_setzero_ps(), along = dot16(w, d[0], d[1], d[2]);
+    const __m512 dd = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(d[0], d[0]), _mm512_mul_ps(d[1], d[1])), _mm512_mul_ps(d[2], d[2]));
+    lanes = _mm512_mask_cmp_ps_mask(lanes, along, zero, _CMP_GT_OQ);
+    lanes = _mm512_mask_cmp_ps_mask(lanes, along, length, _CMP_LE_OQ);
+    lanes = _mm512_mask_cmp_ps_mask(lanes, _mm512_sub_ps(dd, _mm512_mul_ps(along, along)), kernel2, _CMP_NGE_UQ);
+    if (n) lanes = _mm512_mask_cmp_ps_mask(lanes, dot16(n, d[0], d[1], d[2]), zero, _CMP_NLE_UQ);
+    return lanes;
+}
+
+// Sample events {index, slice, u, v} of the `shadowed` lanes, compressed and turned into
+// records, sixteen stored whole at `out` (the lists have room to spare past their ends).
+__attribute__((target("avx512f"), always_inline)) inline void writeEvents16(__mmask16 shadowed, __m512i index, __m512i slice,
+                                                                            __m512 u, __m512 v, SampleEvent* out) {
+    const __m512i ci = _mm512_maskz_compress_epi32(shadowed, index), cs = _mm512_maskz_compress_epi32(shadowed, slice);
+    const __m512i cu = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, u));
+    const __m512i cv = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, v));
+    const __m512i t0 = _mm512_unpacklo_epi32(ci, cs), t1 = _mm512_unpackhi_epi32(ci, cs);
+    const __m512i t2 = _mm512_unpacklo_epi32(cu, cv), t3 = _mm512_unpackhi_epi32(cu, cv);
+    const __m512i r0 = _mm512_unpacklo_epi64(t0, t2), r1 = _mm512_unpackhi_epi64(t0, t2);  // events 4k, 4k + 1
+    const __m512i r2 = _mm512_unpacklo_epi64(t1, t3), r3 = _mm512_unpackhi_epi64(t1, t3);  // 4k + 2, 4k + 3
+    const __m512i q0 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(1, 0, 1, 0)), q1 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m512i q2 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(3, 2, 3, 2)), q3 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(3, 2, 3, 2));
+    _mm512_storeu_si512(out, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(2, 0, 2, 0)));
+    _mm512_storeu_si512(out + 4, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(3, 1, 3, 1)));
+    _mm512_storeu_si512(out + 8, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(2, 0, 2, 0)));
+    _mm512_storeu_si512(out + 12, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(3, 1, 3, 1)));
+}
+
 }  // namespace
 
 // gatherBrick's candidates a layer of the brick at a time (16 voxels, bit x + 4y of the layer's
@@ -181,7 +236,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         nrm[a] = _mm512_set1_ps(n_[a]), aU[a] = _mm512_set1_ps(aU_[a]), aV[a] = _mm512_set1_ps(aV_[a]);
     }
     const __m512 invVoxel = _mm512_set1_ps(invVoxel_), length = _mm512_set1_ps(L_), kernel2 = _mm512_set1_ps(kernel2_);
-    const __m512 zero = _mm512_setzero_ps(), half = _mm512_set1_ps(0.5f);
+    const __m512 half = _mm512_set1_ps(0.5f);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const __m512i halfU = _mm512_set1_epi32(halfU_), halfV = _mm512_set1_epi32(halfV_);
     const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
@@ -197,29 +252,12 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
     int layerSlice[kBrickSize], perLayer[kBrickSize] = {};
     for (int l = 0; l < layers; ++l) layerSlice[l] = sliceOf(layerLo + l);
     for (uint32_t i = first; i < last; i += 16) {
-        // The group's positions, the floats past `last` not read (a masked load does not fault).
         const int count = int(std::min<uint32_t>(16u, last - i));
-        const float* f = &eye_.position[i].x;
-        const __m512 va = _mm512_maskz_loadu_ps(firstLanes(3 * count), f);
-        const __m512 vb = _mm512_maskz_loadu_ps(firstLanes(3 * count - 16), f + 16);
-        const __m512 vc = _mm512_maskz_loadu_ps(firstLanes(3 * count - 32), f + 32);
-        __m512 d[3], p[3];
-        for (int a = 0; a < 3; ++a) {
-            const __m512 world = _mm512_permutex2var_ps(_mm512_permutex2var_ps(va, ab[a], vb), c[a], vc);
-            p[a] = _mm512_mul_ps(_mm512_sub_ps(world, origin[a]), invVoxel);
-            d[a] = _mm512_sub_ps(p[a], o[a]);
-        }
+        const SampleLanes lanes = loadSamples16(&eye_.position[i].x, count, origin, invVoxel, o, ab, c);
+        const __m512* p = lanes.p;
+        const __m512* d = lanes.d;
         __mmask16 reached = firstLanes(count);
-        if (!surelyReached) {
-            const __m512 along = dot16(w, d[0], d[1], d[2]);
-            const __m512 dd = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(d[0], d[0]), _mm512_mul_ps(d[1], d[1])),
-                                            _mm512_mul_ps(d[2], d[2]));
-            reached = _mm512_mask_cmp_ps_mask(reached, along, zero, _CMP_GT_OQ);
-            reached = _mm512_mask_cmp_ps_mask(reached, along, length, _CMP_LE_OQ);
-            reached = _mm512_mask_cmp_ps_mask(reached, _mm512_sub_ps(dd, _mm512_mul_ps(along, along)), kernel2, _CMP_NGE_UQ);
-            if (hasNormal_) reached = _mm512_mask_cmp_ps_mask(reached, dot16(nrm, d[0], d[1], d[2]), zero, _CMP_NLE_UQ);
-            if (!reached) continue;
-        }
+        if (!surelyReached && !(reached = reachLanes16(reached, d, w, length, kernel2, hasNormal_ ? nrm : nullptr))) continue;
         const __m512 u = dot16(aU, d[0], d[1], d[2]), v = dot16(aV, d[0], d[1], d[2]);
         const __m512i i0 = _mm512_add_epi32(floor16(_mm512_sub_ps(u, half)), halfU);
         const __m512i j0 = _mm512_add_epi32(floor16(_mm512_sub_ps(v, half)), halfV);
@@ -245,22 +283,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
         _mm512_storeu_si512(&s_.unshadowed[free], _mm512_maskz_compress_epi32(unshadowed, index));
         free += size_t(__builtin_popcount(unshadowed));
         if (!shadowed) continue;
-        // Events {index, slice, u, v}: the shadowed lanes compressed, then turned to records
-        // (the room has 16 events to spare past the brick's samples).
-        const __m512i ci = _mm512_maskz_compress_epi32(shadowed, index), cs = _mm512_maskz_compress_epi32(shadowed, slice);
-        const __m512i cu = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, u));
-        const __m512i cv = _mm512_castps_si512(_mm512_maskz_compress_ps(shadowed, v));
-        const __m512i t0 = _mm512_unpacklo_epi32(ci, cs), t1 = _mm512_unpackhi_epi32(ci, cs);
-        const __m512i t2 = _mm512_unpacklo_epi32(cu, cv), t3 = _mm512_unpackhi_epi32(cu, cv);
-        const __m512i r0 = _mm512_unpacklo_epi64(t0, t2), r1 = _mm512_unpackhi_epi64(t0, t2);  // events 4k, 4k + 1
-        const __m512i r2 = _mm512_unpacklo_epi64(t1, t3), r3 = _mm512_unpackhi_epi64(t1, t3);  // 4k + 2, 4k + 3
-        const __m512i q0 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(1, 0, 1, 0)), q1 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m512i q2 = _mm512_shuffle_i32x4(r0, r1, _MM_SHUFFLE(3, 2, 3, 2)), q3 = _mm512_shuffle_i32x4(r2, r3, _MM_SHUFFLE(3, 2, 3, 2));
-        SampleEvent* out = &s_.samples[n];
-        _mm512_storeu_si512(out, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(2, 0, 2, 0)));
-        _mm512_storeu_si512(out + 4, _mm512_shuffle_i32x4(q0, q1, _MM_SHUFFLE(3, 1, 3, 1)));
-        _mm512_storeu_si512(out + 8, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(2, 0, 2, 0)));
-        _mm512_storeu_si512(out + 12, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(3, 1, 3, 1)));
+        writeEvents16(shadowed, index, slice, u, v, &s_.samples[n]);
         // Per voxel layer of the brick, how many events it got (in registers: the same count
         // added to one cell sample by sample would wait on its own stores).
         for (int l = 0; l < layers; ++l)
