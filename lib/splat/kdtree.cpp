@@ -311,6 +311,68 @@ void OcclusionTreeStats::report(Stats& stats) const {
     stats.setCount("tree_mb", double(bytes) / kMB);
 }
 
+namespace {
+
+// The index of the brick holding voxel (x, y, z), x fastest.
+size_t brickIndexOf(const IVec3& brickDims, int x, int y, int z) {
+    return size_t(x >> kBrickShift) +
+           size_t(brickDims.x) * (size_t(y >> kBrickShift) + size_t(brickDims.y) * size_t(z >> kBrickShift));
+}
+
+// The eye samples inside the grid as (brick << 32 | sample) keys sorted by brick, then sample
+// (a counting sort over the bricks, in sample order within one: the order std::sort would give
+// these unique keys, in linear time); which samples are inside, and each one's octant of its
+// brick.
+struct SamplesByBrick {
+    std::vector<uint64_t> keys;
+    std::vector<uint8_t> inside, octant;
+};
+SamplesByBrick sortByBrick(const GridGeometry& g, const IVec3& brickDims, const EyeSamples& samples, ThreadPool& pool) {
+    const size_t n = samples.size();
+    SamplesByBrick out{std::vector<uint64_t>(n), std::vector<uint8_t>(n), std::vector<uint8_t>(n)};
+    pool.parallelFor(int64_t(n), 4096, [&](int64_t b, int64_t e, int) {
+        for (int64_t i = b; i < e; ++i) {
+            Vec3 p = g.voxelFromWorld(samples.position[size_t(i)]);
+            Vec3 f = glm::floor(p);
+            bool ok = isFinite(p) && f.x >= 0.f && f.y >= 0.f && f.z >= 0.f && f.x < float(g.dims.x) &&
+                      f.y < float(g.dims.y) && f.z < float(g.dims.z);
+            out.inside[size_t(i)] = ok;
+            if (ok) out.octant[size_t(i)] = uint8_t((int(f.x) >> 1 & 1) | (int(f.y) >> 1 & 1) << 1 | (int(f.z) >> 1 & 1) << 2);
+            out.keys[size_t(i)] = ok ? uint64_t(brickIndexOf(brickDims, int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
+        }
+    });
+    std::vector<uint32_t> start(size_t(brickDims.x) * brickDims.y * brickDims.z + 1, 0);
+    size_t insideCount = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (out.inside[i]) ++start[(out.keys[i] >> 32) + 1], ++insideCount;
+    for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+    std::vector<uint64_t> sorted(insideCount);
+    for (size_t i = 0; i < n; ++i)
+        if (out.inside[i]) sorted[start[out.keys[i] >> 32]++] = out.keys[i];
+    out.keys.swap(sorted);
+    return out;
+}
+
+// Per brick, whether it is interesting: it holds an occupied voxel or an eye sample.
+std::vector<uint8_t> interestingBricks(const OcclusionGrid& grid, const IVec3& brickDims, const std::vector<uint64_t>& keys,
+                                       ThreadPool& pool) {
+    const GridGeometry& g = grid.geometry;
+    std::vector<uint8_t> flags(size_t(brickDims.x) * brickDims.y * brickDims.z);
+    pool.parallelFor(int64_t(brickDims.y) * brickDims.z, 16, [&](int64_t b, int64_t e, int) {
+        for (int64_t row = b; row < e; ++row) {  // one row of bricks along x
+            const int by = int(row % brickDims.y), bz = int(row / brickDims.y);
+            for (int z = bz * kBrickSize; z < std::min(g.dims.z, (bz + 1) * kBrickSize); ++z)
+                for (int y = by * kBrickSize; y < std::min(g.dims.y, (by + 1) * kBrickSize); ++y)
+                    for (int x = 0; x < g.dims.x; ++x)
+                        if (grid.occupied(g.index(x, y, z))) flags[brickIndexOf(brickDims, x, y, z)] = 1;
+        }
+    });
+    for (uint64_t k : keys) flags[k >> 32] = 1;
+    return flags;
+}
+
+}  // namespace
+
 OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples, ThreadPool& pool,
                                  OcclusionTreeStats* statsOut) {
     Timer total;
@@ -323,58 +385,16 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
                                            " is outside 1…" + std::to_string(kMaxTreeDim) + " voxels an axis");
     RS_CHECK(grid.counts.size() == g.voxelCount() * kSideCount);
     RS_CHECK(samples.size() < (size_t(1) << 32));
-
-    // Eye samples by brick: sorted (brick << 32 | sample) keys; outside ones kept apart.
-    Timer sortTimer;
     const IVec3 brickDims = (g.dims + IVec3(kBrickSize - 1)) / kBrickSize;
-    auto brickIndex = [&](int x, int y, int z) {
-        return size_t(x >> kBrickShift) + size_t(brickDims.x) * (size_t(y >> kBrickShift) + size_t(brickDims.y) * size_t(z >> kBrickShift));
-    };
     const size_t n = samples.size();
-    std::vector<uint64_t> keys(n);
-    std::vector<uint8_t> inside(n), octant(n);
-    pool.parallelFor(int64_t(n), 4096, [&](int64_t b, int64_t e, int) {
-        for (int64_t i = b; i < e; ++i) {
-            Vec3 p = g.voxelFromWorld(samples.position[size_t(i)]);
-            Vec3 f = glm::floor(p);
-            bool ok = isFinite(p) && f.x >= 0.f && f.y >= 0.f && f.z >= 0.f && f.x < float(g.dims.x) &&
-                      f.y < float(g.dims.y) && f.z < float(g.dims.z);
-            inside[size_t(i)] = ok;
-            if (ok) octant[size_t(i)] = uint8_t((int(f.x) >> 1 & 1) | (int(f.y) >> 1 & 1) << 1 | (int(f.z) >> 1 & 1) << 2);
-            keys[size_t(i)] = ok ? uint64_t(brickIndex(int(f.x), int(f.y), int(f.z))) << 32 | uint64_t(i) : ~uint64_t(0);
-        }
-    });
-    // Sorted by brick, then sample: a counting sort over the bricks, in sample order within one
-    // (the order std::sort would give these unique keys, in linear time).
-    {
-        std::vector<uint32_t> start(size_t(brickDims.x) * brickDims.y * brickDims.z + 1, 0);
-        size_t insideCount = 0;
-        for (size_t i = 0; i < n; ++i)
-            if (inside[i]) ++start[(keys[i] >> 32) + 1], ++insideCount;
-        for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-        std::vector<uint64_t> sorted(insideCount);
-        for (size_t i = 0; i < n; ++i)
-            if (inside[i]) sorted[start[keys[i] >> 32]++] = keys[i];
-        keys.swap(sorted);
-    }
-    st.samplesOutside = n - keys.size();
+
+    Timer sortTimer;
+    SamplesByBrick byBrick = sortByBrick(g, brickDims, samples, pool);
+    st.samplesOutside = n - byBrick.keys.size();
     st.sortSeconds = sortTimer.seconds();
 
-    // Interesting bricks: holding an occupied voxel or an eye sample.
     Timer satTimer;
-    std::vector<uint8_t> flags(size_t(brickDims.x) * brickDims.y * brickDims.z);
-    pool.parallelFor(int64_t(brickDims.y) * brickDims.z, 16, [&](int64_t b, int64_t e, int) {
-        for (int64_t row = b; row < e; ++row) {  // one row of bricks along x
-            const int by = int(row % brickDims.y), bz = int(row / brickDims.y);
-            for (int z = bz * kBrickSize; z < std::min(g.dims.z, (bz + 1) * kBrickSize); ++z)
-                for (int y = by * kBrickSize; y < std::min(g.dims.y, (by + 1) * kBrickSize); ++y)
-                    for (int x = 0; x < g.dims.x; ++x)
-                        if (grid.occupied(g.index(x, y, z))) flags[brickIndex(x, y, z)] = 1;
-        }
-    });
-    for (uint64_t k : keys) flags[k >> 32] = 1;
-    SummedAreaTable sat(brickDims, flags, pool);
-    flags = {};
+    SummedAreaTable sat(brickDims, interestingBricks(grid, brickDims, byBrick.keys, pool), pool);
     st.satSeconds = satTimer.seconds();
 
     Timer buildTimer;
@@ -382,12 +402,12 @@ OcclusionTree buildOcclusionTree(const OcclusionGrid& grid, EyeSamples& samples,
     tree.geometry = g;
     std::vector<uint32_t> order;
     order.reserve(n);
-    Builder builder(grid, sat, keys, octant, samples.position, order, tree);
+    Builder builder(grid, sat, byBrick.keys, byBrick.octant, samples.position, order, tree);
     builder.build({IVec3(0), brickDims}, 0);
-    RS_CHECK(order.size() == keys.size());
+    RS_CHECK(order.size() == byBrick.keys.size());
     tree.sampleCount = uint32_t(order.size());
     for (size_t i = 0; i < n; ++i)
-        if (!inside[i]) order.push_back(uint32_t(i));
+        if (!byBrick.inside[i]) order.push_back(uint32_t(i));
     tree.nodes.shrink_to_fit();
     tree.bricks.shrink_to_fit();
     tree.voxels.shrink_to_fit();
