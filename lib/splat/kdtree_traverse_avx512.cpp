@@ -165,15 +165,26 @@ __attribute__((target("avx512f"), always_inline)) inline void writeEvents16(__mm
 
 }  // namespace
 
-// gatherBrick's candidates a layer of the brick at a time (16 voxels, bit x + 4y of the layer's
-// 16): the tangent test, the sure met test and the centres' cells in lanes, the same operations
-// in the same order as the four-lane step; the valid-cell test by gathers of the rows' ranges;
-// the exact met test and the occluder for the lanes left, in bit order.
+// gatherBrick's candidates sixteen at a time, in bit order: their bit numbers compressed out of
+// the brick's four layers (a wall across x or y has four candidates a layer: one group for the
+// brick where there were four), then the tangent test, the sure met test and the centres' cells
+// in lanes, the same operations in the same order as the four-lane step; the valid-cell test by
+// gathers of the rows' ranges; the exact met test and the occluder for the lanes left, in bit
+// order.
 __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders16(const StackEntry& e, const Brick& brick,
                                                                                    uint64_t candidates) {
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), three = _mm512_set1_epi32(3);
-    const __m512i vx = _mm512_add_epi32(_mm512_set1_epi32(e.lo[0]), _mm512_and_si512(lane, three));
-    const __m512i vy = _mm512_add_epi32(_mm512_set1_epi32(e.lo[1]), _mm512_srli_epi32(lane, 2));
+    // The candidates' bit numbers in order (compressed in registers, stored whole: the list has
+    // room for sixteen past its end).
+    alignas(64) int32_t bitOf[64 + 16];
+    int count = 0;
+    for (int layer = 0; layer < kBrickSize; ++layer) {
+        const __mmask16 bits = __mmask16(candidates >> (16 * layer));
+        if (!bits) continue;
+        _mm512_storeu_si512(bitOf + count, _mm512_maskz_compress_epi32(bits, _mm512_add_epi32(lane, _mm512_set1_epi32(16 * layer))));
+        count += __builtin_popcount(bits);
+    }
+    const __m512i corner[3] = {_mm512_set1_epi32(e.lo[0]), _mm512_set1_epi32(e.lo[1]), _mm512_set1_epi32(e.lo[2])};
     __m512 o[3], w[3], nrm[3], aU[3], aV[3];
     for (int a = 0; a < 3; ++a) {
         o[a] = _mm512_set1_ps(o_[a]), w[a] = _mm512_set1_ps(w_[a]), nrm[a] = _mm512_set1_ps(n_[a]);
@@ -182,11 +193,12 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
     const __m512 half = _mm512_set1_ps(0.5f), zero = _mm512_setzero_ps();
     const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
     const int32_t* rows = &s_.rows[0].lo;
-    for (int layer = 0; layer < kBrickSize; ++layer) {
-        const __mmask16 bits = __mmask16(candidates >> (16 * layer));
-        if (!bits) continue;
-        const __m512i vz = _mm512_set1_epi32(e.lo[2] + layer);
-        const __m512i vi[3] = {vx, vy, vz};
+    for (int group = 0; group < count; group += 16) {
+        const __mmask16 bits = firstLanes(count - group);
+        const __m512i b = _mm512_loadu_si512(bitOf + group);
+        const __m512i vi[3] = {_mm512_add_epi32(corner[0], _mm512_and_si512(b, three)),
+                               _mm512_add_epi32(corner[1], _mm512_and_si512(_mm512_srli_epi32(b, 2), three)),
+                               _mm512_add_epi32(corner[2], _mm512_srli_epi32(b, 4))};
         __m512 d[3];
         for (int a = 0; a < 3; ++a) d[a] = _mm512_sub_ps(_mm512_add_ps(_mm512_cvtepi32_ps(vi[a]), half), o[a]);
         const __mmask16 front =
@@ -212,9 +224,9 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
         alignas(64) int32_t cus[16], cvs[16];
         _mm512_store_si512(cus, cu), _mm512_store_si512(cvs, cv);
         for (unsigned k = keep; k; k &= k - 1) {
-            const int l = __builtin_ctz(k);
-            const int v[3] = {e.lo[0] + (l & 3), e.lo[1] + (l >> 2), e.lo[2] + layer};
-            if (sure >> l & 1u || voxelMet(v[0], v[1], v[2])) addOccluderAt(cus[l], cvs[l], v[N_], brickVoxel(brick, 16 * layer + l));
+            const int l = __builtin_ctz(k), bit = bitOf[group + l];
+            const int v[3] = {e.lo[0] + (bit & 3), e.lo[1] + (bit >> 2 & 3), e.lo[2] + (bit >> 4)};
+            if (sure >> l & 1u || voxelMet(v[0], v[1], v[2])) addOccluderAt(cus[l], cvs[l], v[N_], brickVoxel(brick, bit));
         }
     }
 }
