@@ -232,8 +232,10 @@ private:
         for (auto it = from; it != to; ++it) ++count[octant_[*it & 0xffffffffu]];
         uint32_t start[8] = {};
         for (int k = 1; k < 8; ++k) start[k] = start[k - 1] + count[k - 1];
-        if (brick.divided())
+        if (brick.divided()) {
             for (int k = 1; k < 8; ++k) brick.octantStart[k - 1] = uint16_t(start[k]);
+            for (int k = 0; k < 8; ++k) brick.octantsFilled |= uint8_t(count[k] ? 1u << k : 0u);
+        }
         order_.resize(order_.size() + brick.sampleCount);
         uint32_t* out = order_.data() + brick.firstSample;  // (no element when the brick has no samples)
         Vec3 boxLo(INFINITY), boxHi(-INFINITY);

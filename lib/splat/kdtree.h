@@ -86,7 +86,8 @@ struct Brick {
     // brick's min corner in steps of 1/kBoxScale voxel from −kBoxOffset, widened by kBoxPad
     // steps: the traversal skips what it cannot reach without reading the samples.
     uint16_t sampleBox[6] = {};
-    uint16_t pad = 0;  // no indeterminate bytes: trees compare with memcmp
+    uint8_t octantsFilled = 0;  // a divided brick's octants that hold samples: bit k for octant k
+    uint8_t pad = 0;            // no indeterminate bytes: trees compare with memcmp
 
     static constexpr float kBoxScale = 8192.f, kBoxOffset = 0.25f, kBoxPad = 8.f;  // pad: 1e-3 voxel
     void setSampleBox(const Vec3& lo, const Vec3& hi);  // relative to the brick's min corner

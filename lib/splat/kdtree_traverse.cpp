@@ -388,29 +388,32 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         may |= m << (4 * group), sure |= su << (4 * group);
     }
     // Octants read one after another with the same test are read as one range (the same tests
-    // of the same samples, in fewer, fuller groups of lanes).
-    uint32_t runFirst = 0, runLast = 0;  // the octants read but not yet handed over
-    bool runSure = false;
-    auto flush = [&] {
-        if (runFirst < runLast) gatherSampleRange(met.entry, runFirst, runLast, runSure, n, listed);
-        runFirst = runLast = 0;
-    };
-    for (int k = 0; k < 8; ++k) {
-        const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
-        if (first == last || !(may >> k & 1u)) continue;
+    // of the same samples, in fewer, fuller groups of lanes). Walked over the bits of the octants
+    // to read (holding samples, may be reached): an octant taken whole, or a run from the first
+    // octant left up to the next octant with samples that is taken, skipped or read with the
+    // other test (octants without samples are passed over).
+    const uint32_t todoAll = may & brick.octantsFilled;
+    uint32_t take = 0;
+    for (uint32_t bits = todoAll & sure; bits; bits &= bits - 1) {
+        const int k = __builtin_ctz(bits), lane = k & 3;
         const int32_t(&r)[4][4] = rect[k >> 2];
-        const int lane = k & 3;
-        const bool octantSure = sure >> k & 1u;
-        if (octantSure && rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) {
-            flush();  // the lists stay in sample order
-            takeAll(first, last);
+        if (rectUnshadowed(r[0][lane], r[1][lane], r[2][lane], r[3][lane])) take |= 1u << k;
+    }
+    const uint32_t read = todoAll & ~take;
+    for (uint32_t todo = todoAll; todo;) {
+        const int k = __builtin_ctz(todo);
+        if (take >> k & 1u) {
+            takeAll(brick.octantBegin(k), brick.octantEnd(k));
+            todo &= todo - 1;
             continue;
         }
-        if (runFirst < runLast && (first != runLast || octantSure != runSure)) flush();
-        if (runFirst == runLast) runFirst = first, runSure = octantSure;
-        runLast = last;
+        const bool runSure = sure >> k & 1u;
+        const uint32_t run = runSure ? read & sure : read & ~sure;
+        const uint32_t stop = brick.octantsFilled & ~run & ~((2u << k) - 1u);
+        const int end = stop ? __builtin_ctz(stop) : 8;  // the run is octants [k, end)
+        gatherSampleRange(met.entry, brick.octantBegin(k), brick.octantEnd(end - 1), runSure, n, listed);
+        todo &= ~((1u << end) - 1u);
     }
-    flush();
 #else
     for (int k = 0; k < 8; ++k) {
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
