@@ -375,6 +375,10 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
     // its bits 0, 1, 2), then each octant read or taken as they say.
     uint32_t may = 0, sure = 0;
     alignas(16) int32_t rect[2][4][4];
+#if RS_TRAVERSE_AVX512
+    if (sixteen_) boxTests8(corner, lo, hi, may, sure, rect);
+    else
+#endif
     for (int group = 0; group < 2; ++group) {
         const __m128 offset[3] = {_mm_setr_ps(0.f, 2.f, 0.f, 2.f), _mm_setr_ps(0.f, 0.f, 2.f, 2.f), _mm_set1_ps(2.f * float(group))};
         __m128 partLo[3], partHi[3];

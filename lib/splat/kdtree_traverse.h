@@ -322,6 +322,9 @@ private:
 #if defined(__SSE2__)
     void boxTests4(const __m128 lo[3], const __m128 hi[3], uint32_t& may, uint32_t& sure, int32_t rect[4][4]) const;
 #endif
+#if RS_TRAVERSE_AVX512
+    void boxTests8(const Vec3& corner, const Vec3& lo, const Vec3& hi, uint32_t& may, uint32_t& sure, int32_t rect[2][4][4]) const;
+#endif
     int firstShadowingSlice(int i0, int j0) const;
 
     // Sweep.

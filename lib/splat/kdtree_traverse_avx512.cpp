@@ -1,8 +1,9 @@
 // The traversal's sixteen-lane steps, on CPUs with AVX-512 (chosen at run time: the build
 // assumes only x86-64's SSE2): the reach test, a brick's candidate occluders and the sweep's
-// reads. Each lane makes the same operations in the same order as the four-lane step (the
-// build does not contract a product and a sum into one rounding), so the lists, events and
-// values are the same, in the same order, as the four-lane path makes them.
+// reads, and a brick's eight octant box tests in one step of eight lanes. Each lane makes the
+// same operations in the same order as the four-lane step (the build does not contract a
+// product and a sum into one rounding), so the lists, events and values are the same, in the
+// same order, as the four-lane path makes them.
 #include "splat/kdtree_traverse.h"
 
 #include <atomic>
@@ -229,6 +230,77 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
             if (sure >> l & 1u || voxelMet(v[0], v[1], v[2])) addOccluderAt(cus[l], cvs[l], v[N_], brickVoxel(brick, bit));
         }
     }
+}
+
+// boxTests4 for a divided brick's eight octants at once (octant k: x + 2, y + 2, z + 2 at its
+// bits 0, 1, 2), each clipped to the box [lo, hi] its samples lie in, eight lanes wide: lane by
+// lane the same operations in the same order, so the same answers. rect[k >> 2][row][k & 3] is
+// octant k's rectangle, as boxTests4 leaves it for its group of four.
+namespace {
+__attribute__((target("avx512f"), always_inline)) inline __m256 dot8(const __m256 v[3], __m256 x, __m256 y, __m256 z) {
+    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(x, v[0]), _mm256_mul_ps(y, v[1])), _mm256_mul_ps(z, v[2]));
+}
+__attribute__((target("avx512f"), always_inline)) inline __m256 broadcast(const Vec3& v, int a) { return _mm256_set1_ps(v[a]); }
+__attribute__((target("avx512f"), always_inline)) inline __m256i floor8(__m256 x) {
+    const __m256i t = _mm256_cvttps_epi32(x);
+    return _mm256_add_epi32(t, _mm256_castps_si256(_mm256_cmp_ps(x, _mm256_cvtepi32_ps(t), _CMP_LT_OS)));
+}
+__attribute__((target("avx512f"), always_inline)) inline void storeRect(int32_t rect[2][4][4], int row, __m256i v) {
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[0][row]), _mm256_castsi256_si128(v));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[1][row]), _mm256_extracti128_si256(v, 1));
+}
+}  // namespace
+
+__attribute__((target("avx512f"))) void CylinderTraversal::boxTests8(const Vec3& corner, const Vec3& lo, const Vec3& hi,
+                                                                      uint32_t& may, uint32_t& sure, int32_t rect[2][4][4]) const {
+    constexpr float kEdge = 1e-3f;
+    const __m256 offset[3] = {_mm256_setr_ps(0.f, 2.f, 0.f, 2.f, 0.f, 2.f, 0.f, 2.f), _mm256_setr_ps(0.f, 0.f, 2.f, 2.f, 0.f, 0.f, 2.f, 2.f),
+                              _mm256_setr_ps(0.f, 0.f, 0.f, 0.f, 2.f, 2.f, 2.f, 2.f)};
+    const __m256 halfOf = _mm256_set1_ps(0.5f), zero = _mm256_setzero_ps();
+    __m256 w[3], absW[3], absN[3], nrm[3], aU[3], aV[3], absAU[3], absAV[3];
+    __m256 d[3], half[3], valid = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    for (int a = 0; a < 3; ++a) {
+        w[a] = broadcast(w_, a), absW[a] = broadcast(absW_, a), absN[a] = broadcast(absN_, a), nrm[a] = broadcast(n_, a);
+        aU[a] = broadcast(aU_, a), aV[a] = broadcast(aV_, a), absAU[a] = broadcast(absAU_, a), absAV[a] = broadcast(absAV_, a);
+        const __m256 octant = _mm256_add_ps(_mm256_set1_ps(corner[a]), offset[a]);
+        const __m256 partLo = _mm256_max_ps(_mm256_sub_ps(octant, _mm256_set1_ps(kEdge)), _mm256_set1_ps(lo[a]));
+        const __m256 partHi = _mm256_min_ps(_mm256_add_ps(octant, _mm256_set1_ps(2.f + kEdge)), _mm256_set1_ps(hi[a]));
+        valid = _mm256_and_ps(valid, _mm256_cmp_ps(partLo, partHi, _CMP_LE_OS));
+        d[a] = _mm256_sub_ps(_mm256_mul_ps(halfOf, _mm256_add_ps(partLo, partHi)), _mm256_set1_ps(o_[a]));
+        half[a] = _mm256_mul_ps(halfOf, _mm256_sub_ps(partHi, partLo));
+    }
+    const __m256 along = dot8(w, d[0], d[1], d[2]), spreadW = dot8(absW, half[0], half[1], half[2]);
+    const __m256 spreadN = dot8(absN, half[0], half[1], half[2]), dn = dot8(nrm, d[0], d[1], d[2]);
+    const __m256 halfLength = _mm256_sqrt_ps(dot8(half, half[0], half[1], half[2]));
+    const __m256 off2 = _mm256_sub_ps(dot8(d, d[0], d[1], d[2]), _mm256_mul_ps(along, along));
+    const __m256 length = _mm256_set1_ps(L_);
+    // boxMayBeReached.
+    const __m256 slackM = _mm256_set1_ps(kBoxReachSlack), spreadM = _mm256_add_ps(spreadW, slackM);
+    __m256 m = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(_mm256_add_ps(along, spreadM), zero, _CMP_NLE_US),
+                                                  _mm256_cmp_ps(_mm256_sub_ps(along, spreadM), length, _CMP_NGT_US)));
+    if (hasNormal_) m = _mm256_and_ps(m, _mm256_cmp_ps(_mm256_add_ps(_mm256_add_ps(dn, spreadN), slackM), zero, _CMP_NLE_US));
+    const __m256 reach = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(radius_), halfLength), slackM);
+    m = _mm256_and_ps(m, _mm256_cmp_ps(off2, _mm256_mul_ps(reach, reach), _CMP_LT_OS));
+    may = uint32_t(_mm256_movemask_ps(m));
+    // boxSurelyUnshadowed, up to its reading of the map.
+    const __m256 size = _mm256_add_ps(_mm256_add_ps(_mm256_sqrt_ps(dot8(d, d[0], d[1], d[2])), halfLength), _mm256_set1_ps(1.f));
+    const __m256 slack = _mm256_add_ps(_mm256_set1_ps(0.01f), _mm256_mul_ps(_mm256_set1_ps(1e-5f), size));
+    const __m256 slack2 = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(4e-5f), size), size);
+    __m256 su = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(along, spreadW), slack, _CMP_GT_OS),
+                                                   _mm256_cmp_ps(_mm256_add_ps(along, spreadW), _mm256_sub_ps(length, slack), _CMP_LE_OS)));
+    if (hasNormal_) su = _mm256_and_ps(su, _mm256_cmp_ps(_mm256_sub_ps(dn, spreadN), slack, _CMP_GT_OS));
+    const __m256 farthest =
+        _mm256_add_ps(_mm256_add_ps(_mm256_sqrt_ps(_mm256_add_ps(_mm256_max_ps(off2, zero), slack2)), halfLength), slack);
+    su = _mm256_and_ps(su, _mm256_cmp_ps(_mm256_add_ps(_mm256_mul_ps(farthest, farthest), slack2), _mm256_set1_ps(kernel2_), _CMP_LT_OS));
+    sure = uint32_t(_mm256_movemask_ps(su)) & may;
+    if (!sure) return;
+    const __m256 u = dot8(aU, d[0], d[1], d[2]), du = _mm256_add_ps(dot8(absAU, half[0], half[1], half[2]), slack);
+    const __m256 v = dot8(aV, d[0], d[1], d[2]), dv = _mm256_add_ps(dot8(absAV, half[0], half[1], half[2]), slack);
+    const __m256i hu = _mm256_set1_epi32(halfU_), hv = _mm256_set1_epi32(halfV_);
+    storeRect(rect, 0, _mm256_add_epi32(floor8(_mm256_sub_ps(_mm256_sub_ps(u, du), halfOf)), hu));
+    storeRect(rect, 1, _mm256_add_epi32(floor8(_mm256_sub_ps(_mm256_add_ps(u, du), halfOf)), hu));
+    storeRect(rect, 2, _mm256_add_epi32(floor8(_mm256_sub_ps(_mm256_sub_ps(v, dv), halfOf)), hv));
+    storeRect(rect, 3, _mm256_add_epi32(floor8(_mm256_sub_ps(_mm256_add_ps(v, dv), halfOf)), hv));
 }
 
 // gatherSampleRange for sixteen samples at a time: reached lanes (reach()'s tests), their
