@@ -369,10 +369,10 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         else gatherSampleRange(met.entry, brick.firstSample, brick.firstSample + brick.sampleCount, false, n, listed);
         return;
     }
-    constexpr float kEdge = 1e-3f;  // the octants' faces, widened past the positions' rounding
 #if defined(__SSE2__)
-    // The eight octants' tests in two groups of four lanes (octant k: x + 2, y + 2, z + 2 at
-    // its bits 0, 1, 2), then each octant read or taken as they say.
+    // The eight octants' tests in one step of eight lanes where the CPU has AVX-512, else in two
+    // groups of four (octant k: x + 2, y + 2, z + 2 at its bits 0, 1, 2), then each octant read
+    // or taken as they say.
     uint32_t may = 0, sure = 0;
     alignas(16) int32_t rect[2][4][4];
 #if RS_TRAVERSE_AVX512
@@ -384,8 +384,8 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         __m128 partLo[3], partHi[3];
         for (int a = 0; a < 3; ++a) {
             const __m128 octant = _mm_add_ps(_mm_set1_ps(corner[a]), offset[a]);
-            partLo[a] = _mm_max_ps(_mm_sub_ps(octant, _mm_set1_ps(kEdge)), _mm_set1_ps(lo[a]));
-            partHi[a] = _mm_min_ps(_mm_add_ps(octant, _mm_set1_ps(2.f + kEdge)), _mm_set1_ps(hi[a]));
+            partLo[a] = _mm_max_ps(_mm_sub_ps(octant, _mm_set1_ps(kOctantEdge)), _mm_set1_ps(lo[a]));
+            partHi[a] = _mm_min_ps(_mm_add_ps(octant, _mm_set1_ps(2.f + kOctantEdge)), _mm_set1_ps(hi[a]));
         }
         uint32_t m, su;
         boxTests4(partLo, partHi, m, su, rect[group]);
@@ -423,7 +423,7 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         const uint32_t first = brick.octantBegin(k), last = brick.octantEnd(k);
         if (first == last) continue;
         const Vec3 octant = corner + Vec3(float(2 * (k & 1)), float(k & 2), float(k >> 1 & 2));
-        const Vec3 partLo = glm::max(lo, octant - kEdge), partHi = glm::min(hi, octant + (2.f + kEdge));
+        const Vec3 partLo = glm::max(lo, octant - kOctantEdge), partHi = glm::min(hi, octant + (2.f + kOctantEdge));
         if (!boxMayBeReached(partLo, partHi)) continue;
         if (boxSurelyUnshadowed(partLo, partHi)) takeAll(first, last);
         else gatherSampleRange(met.entry, first, last, false, n, listed);
@@ -455,8 +455,8 @@ bool CylinderTraversal::boxSurelyUnshadowed(const Vec3& lo, const Vec3& hi) cons
     const Vec3 c = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
     const Vec3 d = c - o_;
     const float halfLength = glm::length(half), size = glm::length(d) + halfLength + 1.f;
-    const float slack = 0.01f + 1e-5f * size;  // on depths, heights and projections (voxels)
-    const float slack2 = 4e-5f * size * size;  // on squared distances
+    const float slack = kSureSlack + kSureSlackPerSize * size;  // on depths, heights and projections (voxels)
+    const float slack2 = kSureSlack2PerSize2 * size * size;    // on squared distances
     const float along = glm::dot(d, w_), spread = glm::dot(absW_, half);
     if (!(along - spread > slack && along + spread <= L_ - slack)) return false;
     if (hasNormal_ && !(glm::dot(d, n_) - glm::dot(absN_, half) > slack)) return false;
@@ -511,8 +511,8 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
     may = uint32_t(_mm_movemask_ps(m));
     // boxSurelyUnshadowed, up to its reading of the map.
     const __m128 size = _mm_add_ps(_mm_add_ps(_mm_sqrt_ps(dot4(d, d[0], d[1], d[2])), halfLength), _mm_set1_ps(1.f));
-    const __m128 slack = _mm_add_ps(_mm_set1_ps(0.01f), _mm_mul_ps(_mm_set1_ps(1e-5f), size));
-    const __m128 slack2 = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(4e-5f), size), size);
+    const __m128 slack = _mm_add_ps(_mm_set1_ps(kSureSlack), _mm_mul_ps(_mm_set1_ps(kSureSlackPerSize), size));
+    const __m128 slack2 = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(kSureSlack2PerSize2), size), size);
     __m128 s = _mm_and_ps(valid, _mm_and_ps(_mm_cmpgt_ps(_mm_sub_ps(along, spreadW), slack),
                                             _mm_cmple_ps(_mm_add_ps(along, spreadW), _mm_sub_ps(wide_.length, slack))));
     if (hasNormal_) s = _mm_and_ps(s, _mm_cmpgt_ps(_mm_sub_ps(dn, spreadN), slack));

@@ -125,6 +125,12 @@ constexpr int kMaxAmbiguousOffset = 4;    // N slices
 constexpr float kOccluderMargin = 0.6f;   // h' = h + margin gathers the occluders of valid cells
 constexpr float kValidCellMargin = 0.71f; // valid cells: centre within h + margin of the axis
 constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested that much wider
+// A box surely unshadowed: its bounds narrowed by kSureSlack + kSureSlackPerSize·size on depths,
+// heights and projections, and by kSureSlack2PerSize2·size² on squared distances (size: the
+// box's distance from the origin plus its half-diagonal plus 1), far above the per-sample tests'
+// rounding. Shared by the one-box test and its four- and eight-lane forms, which must agree.
+constexpr float kSureSlack = 0.01f, kSureSlackPerSize = 1e-5f, kSureSlack2PerSize2 = 4e-5f;
+constexpr float kOctantEdge = 1e-3f;      // voxels: a brick's octant faces, widened past the positions' rounding
 constexpr uint16_t kNoOccluder = 0xffff;  // the shadowable map's "no occluder in this block"
 constexpr size_t kEventSlack = 16;         // sample lists: room past the last entry, for sixteen-lane stores
 

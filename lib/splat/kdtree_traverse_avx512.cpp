@@ -253,7 +253,6 @@ __attribute__((target("avx512f"), always_inline)) inline void storeRect(int32_t 
 
 __attribute__((target("avx512f"))) void CylinderTraversal::boxTests8(const Vec3& corner, const Vec3& lo, const Vec3& hi,
                                                                       uint32_t& may, uint32_t& sure, int32_t rect[2][4][4]) const {
-    constexpr float kEdge = 1e-3f;
     const __m256 offset[3] = {_mm256_setr_ps(0.f, 2.f, 0.f, 2.f, 0.f, 2.f, 0.f, 2.f), _mm256_setr_ps(0.f, 0.f, 2.f, 2.f, 0.f, 0.f, 2.f, 2.f),
                               _mm256_setr_ps(0.f, 0.f, 0.f, 0.f, 2.f, 2.f, 2.f, 2.f)};
     const __m256 halfOf = _mm256_set1_ps(0.5f), zero = _mm256_setzero_ps();
@@ -263,8 +262,8 @@ __attribute__((target("avx512f"))) void CylinderTraversal::boxTests8(const Vec3&
         w[a] = broadcast(w_, a), absW[a] = broadcast(absW_, a), absN[a] = broadcast(absN_, a), nrm[a] = broadcast(n_, a);
         aU[a] = broadcast(aU_, a), aV[a] = broadcast(aV_, a), absAU[a] = broadcast(absAU_, a), absAV[a] = broadcast(absAV_, a);
         const __m256 octant = _mm256_add_ps(_mm256_set1_ps(corner[a]), offset[a]);
-        const __m256 partLo = _mm256_max_ps(_mm256_sub_ps(octant, _mm256_set1_ps(kEdge)), _mm256_set1_ps(lo[a]));
-        const __m256 partHi = _mm256_min_ps(_mm256_add_ps(octant, _mm256_set1_ps(2.f + kEdge)), _mm256_set1_ps(hi[a]));
+        const __m256 partLo = _mm256_max_ps(_mm256_sub_ps(octant, _mm256_set1_ps(kOctantEdge)), _mm256_set1_ps(lo[a]));
+        const __m256 partHi = _mm256_min_ps(_mm256_add_ps(octant, _mm256_set1_ps(2.f + kOctantEdge)), _mm256_set1_ps(hi[a]));
         valid = _mm256_and_ps(valid, _mm256_cmp_ps(partLo, partHi, _CMP_LE_OS));
         d[a] = _mm256_sub_ps(_mm256_mul_ps(halfOf, _mm256_add_ps(partLo, partHi)), _mm256_set1_ps(o_[a]));
         half[a] = _mm256_mul_ps(halfOf, _mm256_sub_ps(partHi, partLo));
@@ -284,8 +283,8 @@ __attribute__((target("avx512f"))) void CylinderTraversal::boxTests8(const Vec3&
     may = uint32_t(_mm256_movemask_ps(m));
     // boxSurelyUnshadowed, up to its reading of the map.
     const __m256 size = _mm256_add_ps(_mm256_add_ps(_mm256_sqrt_ps(dot8(d, d[0], d[1], d[2])), halfLength), _mm256_set1_ps(1.f));
-    const __m256 slack = _mm256_add_ps(_mm256_set1_ps(0.01f), _mm256_mul_ps(_mm256_set1_ps(1e-5f), size));
-    const __m256 slack2 = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(4e-5f), size), size);
+    const __m256 slack = _mm256_add_ps(_mm256_set1_ps(kSureSlack), _mm256_mul_ps(_mm256_set1_ps(kSureSlackPerSize), size));
+    const __m256 slack2 = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(kSureSlack2PerSize2), size), size);
     __m256 su = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(along, spreadW), slack, _CMP_GT_OS),
                                                    _mm256_cmp_ps(_mm256_add_ps(along, spreadW), _mm256_sub_ps(length, slack), _CMP_LE_OS)));
     if (hasNormal_) su = _mm256_and_ps(su, _mm256_cmp_ps(_mm256_sub_ps(dn, spreadN), slack, _CMP_GT_OS));
