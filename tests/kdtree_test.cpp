@@ -268,6 +268,12 @@ TEST(OcclusionTreeBuild, NodeIsEightBytes) {
     Node b = Node::brickLeaf(4000000000u);
     EXPECT_EQ(b.type(), NodeType::Brick);
     EXPECT_EQ(b.brick(), 4000000000u);
+    EXPECT_EQ(b.voxelHint(), Node::kNoVoxelHint);
+    Node h = Node::brickLeaf(7u, 123456789u);
+    EXPECT_EQ(h.type(), NodeType::Brick);
+    EXPECT_EQ(h.brick(), 7u);
+    EXPECT_EQ(h.voxelHint(), 123456789u);
+    EXPECT_EQ(Node::brickLeaf(7u, 0x40000000u).voxelHint(), Node::kNoVoxelHint);
     // A voxel's occlusion in 32 bits: the same counts, ambiguity and dominant axis.
     VoxelOcclusion v = VoxelOcclusion::of(c), fromNode = n.voxel();
     for (int side = 0; side < kSideCount; ++side) EXPECT_EQ(v.count(side), c[side]);

@@ -247,7 +247,7 @@ private:
         }
         if (from != to) brick.setSampleBox(boxLo, boxHi);
         RS_CHECK(tree_.bricks.size() < (size_t(1) << 32));
-        push(Node::brickLeaf(uint32_t(tree_.bricks.size())));
+        push(Node::brickLeaf(uint32_t(tree_.bricks.size()), brick.firstVoxel));
         tree_.bricks.push_back(brick);
     }
 

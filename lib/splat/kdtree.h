@@ -107,7 +107,9 @@ struct Brick {
 // One 64-bit word:
 //   bits 0-1  type
 //   Split:     2-3 axis, 4-16 plane (voxel boundary 0…4096), 32-63 index of the upper child
-//   Brick:     32-63 index of its payload in OcclusionTree::bricks
+//   Brick:     2-31 where its voxels' counts start in OcclusionTree::voxels (kNoVoxelHint from
+//              2^30 − 1 on), for the traversal to ask for them when it meets the brick;
+//              32-63 index of its payload in OcclusionTree::bricks
 //   Occlusion: 2-3 dominant axis, 4 ambiguous, 5-34 the six side counts (5 bits each, Side
 //              order, 0…16), 35-58 quantized mean normal (3 × int8, ×127, paper Fig. 3)
 struct Node {
@@ -120,6 +122,8 @@ struct Node {
     uint32_t upperChild() const { return uint32_t(bits >> 32); }
 
     uint32_t brick() const { return uint32_t(bits >> 32); }
+    static constexpr uint32_t kNoVoxelHint = 0x3fffffffu;
+    uint32_t voxelHint() const { return uint32_t(bits >> 2) & kNoVoxelHint; }
 
     int dominantAxis() const { return int(bits >> 2) & 3; }
     bool ambiguous() const { return (bits >> 4) & 1u; }
@@ -133,7 +137,9 @@ struct Node {
     static Node split(int axis, int plane, uint32_t upper) {
         return Node{uint64_t(NodeType::Split) | uint64_t(axis) << 2 | uint64_t(plane) << 4 | uint64_t(upper) << 32};
     }
-    static Node brickLeaf(uint32_t index) { return Node{uint64_t(NodeType::Brick) | uint64_t(index) << 32}; }
+    static Node brickLeaf(uint32_t index, uint32_t firstVoxel = kNoVoxelHint) {
+        return Node{uint64_t(NodeType::Brick) | uint64_t(std::min(firstVoxel, kNoVoxelHint)) << 2 | uint64_t(index) << 32};
+    }
     static Node occlusion(const uint8_t counts[kSideCount]);
     VoxelOcclusion voxel() const {
         return VoxelOcclusion{(uint32_t(bits >> 5) & 0x3fffffffu) | (uint32_t(dominantAxis()) << 30)};

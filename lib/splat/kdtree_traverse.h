@@ -275,7 +275,9 @@ private:
         Node node;
     };
     static constexpr unsigned kLeafLag = 8;  // leaves met before the first is worked on
-    void prefetchBrick(uint32_t index) const;
+    // Always inlined: GCC takes a function whose only effects are prefetches for one without
+    // effects, and drops the calls to it when it is not inlined early.
+    __attribute__((always_inline)) void prefetchBrick(Node node) const;
     void gatherLeaf(const MetLeaf& leaf);
     void gatherBrick(const StackEntry& e, uint32_t index);
 #if RS_TRAVERSE_AVX512
