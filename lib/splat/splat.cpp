@@ -287,8 +287,9 @@ public:
 #endif
     }
 
-    // What receive reads of the samples that may come next, asked for while the traversal tests them.
-    void prefetch(SamplesAhead ahead) const {
+    // What receive reads of the samples that may come next, asked for while the traversal tests them
+    // (always inlined: GCC drops calls to a function whose only effects are prefetches).
+    __attribute__((always_inline)) void prefetch(SamplesAhead ahead) const {
         prefetchRange(samples_.normal, ahead.first, ahead.last), prefetchRange(samples_.geomNormal, ahead.first, ahead.last);
         prefetchRange(samples_.bsdf, ahead.first, ahead.last), prefetchRange(samples_.pixel, ahead.first, ahead.last);
     }
