@@ -8,8 +8,7 @@
 //          that can also be called as visit(const uint32_t* index, size_t count) gets the
 //          samples with V = 1 that way, a brick's at a time; one that can be called as
 //          visit(const uint32_t* index, const float* V, size_t count) gets the others that
-//          way, up to sixteen at a time; one that can be called as
-//          visit(SamplesAhead) is told which samples may come next, before they are tested.
+//          way, up to sixteen at a time.
 // Space:   voxel space; the cylinder axis is o + tω, t ∈ [0, L], radius h.
 //
 // Definitions (the brute force in tests/kdtree_test.cpp implements the same independently):
@@ -197,13 +196,6 @@ inline void prefetchRange(const std::vector<T>& v, uint32_t first, uint32_t last
     const char* end = reinterpret_cast<const char*>(v.data() + last);
     for (const char* q = reinterpret_cast<const char*>(v.data() + first); q < end; q += 64) __builtin_prefetch(q);
 }
-
-// What a visitor that can be called as visit(SamplesAhead) is told before a brick's reached
-// samples are looked for: they are among [first, last), so that it can ask for what it will
-// read of them while the traversal tests them (the splat's normals, BSDFs and pixels).
-struct SamplesAhead {
-    uint32_t first, last;
-};
 
 // A visitor of several callables (one per kind of call, as std::visit's examples build it).
 template <class... Fns>
@@ -438,10 +430,6 @@ template <class Visit>
 void CylinderTraversal::visitSamples(Visit&& visit) {
     markShadowable();
     for (const kd_detail::MetBrick& met : s_.bricks) {
-        if constexpr (std::is_invocable_v<Visit&, SamplesAhead>) {
-            const Brick& brick = tree_.bricks[met.brick];
-            visit(SamplesAhead{brick.firstSample, brick.firstSample + brick.sampleCount});
-        }
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
             visit(static_cast<const uint32_t*>(s_.unshadowed.data()), s_.unshadowed.size());

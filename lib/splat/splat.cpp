@@ -287,13 +287,6 @@ public:
 #endif
     }
 
-    // What receive reads of the samples that may come next, asked for while the traversal tests them
-    // (always inlined: GCC drops calls to a function whose only effects are prefetches).
-    __attribute__((always_inline)) void prefetch(SamplesAhead ahead) const {
-        prefetchRange(samples_.normal, ahead.first, ahead.last), prefetchRange(samples_.geomNormal, ahead.first, ahead.last);
-        prefetchRange(samples_.bsdf, ahead.first, ahead.last), prefetchRange(samples_.pixel, ahead.first, ahead.last);
-    }
-
     // One sample, whose visibility by the mask is `visibility` (with batches: gathered four at
     // a time for receive4).
     void receive(uint32_t i, float visibility) {
@@ -552,8 +545,7 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
                                         [&](const uint32_t* index, const float* visibility, size_t count) {
                                             splat.receiveSeen(index, visibility, count);
-                                        },
-                                        [&](SamplesAhead ahead) { splat.prefetch(ahead); }},
+                                        }},
                              &stats[thread].traversal);
             splat.finish();
         }
