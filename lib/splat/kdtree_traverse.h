@@ -430,7 +430,14 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
 template <class Visit>
 void CylinderTraversal::visitSamples(Visit&& visit) {
     markShadowable();
-    for (const kd_detail::MetBrick& met : s_.bricks) {
+    for (size_t k = 0; k < s_.bricks.size(); ++k) {
+        const kd_detail::MetBrick& met = s_.bricks[k];
+        // The next brick's positions, asked for again: asked for when the walk worked on the
+        // brick, they have left L1 since.
+        if (k + 1 < s_.bricks.size()) {
+            const Brick& next = tree_.bricks[s_.bricks[k + 1].brick];
+            prefetchRange(eye_.position, next.firstSample, next.firstSample + next.sampleCount);
+        }
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
             visit(static_cast<const uint32_t*>(s_.unshadowed.data()), s_.unshadowed.size());
