@@ -224,18 +224,13 @@ bool CylinderTraversal::allBehindTangent(const StackEntry& e, uint64_t bits) con
 
 // The brick's occupied voxels that the cylinder meets become occluders, walked over the set
 // bits (the rank of a bit among the occupied ones is where its counts are); a brick with
-// samples the cylinder may reach (its sample box tested) is kept for visitSamples, its sample
-// positions asked for now.
+// samples the cylinder may reach (its sample box tested) is kept for visitSamples.
 void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
     const Brick& brick = tree_.bricks[index];
     if (brick.sampleCount > 0) {
         Vec3 lo, hi;
         brick.sampleBounds(Vec3(e.lo[0], e.lo[1], e.lo[2]), lo, hi);
-        if (boxMayBeReached(lo, hi)) {
-            // The positions, wanted in visitSamples: no waiting then.
-            prefetchRange(eye_.position, brick.firstSample, brick.firstSample + brick.sampleCount);
-            s_.bricks.push_back({e, index});
-        }
+        if (boxMayBeReached(lo, hi)) s_.bricks.push_back({e, index});
     }
     // Only voxels with counts on a side ω sees can occlude (the others would add 0).
     const uint64_t candidates = brick.sides[side_[0]] | brick.sides[side_[1]] | brick.sides[side_[2]];

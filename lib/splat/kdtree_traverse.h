@@ -430,14 +430,19 @@ inline float CylinderTraversal::read(const SampleEvent& ev) const {
 template <class Visit>
 void CylinderTraversal::visitSamples(Visit&& visit) {
     markShadowable();
+    // A brick's positions are asked for two bricks ahead of reaching its samples (asked for when
+    // the walk met the brick, many had left L1 by the time they were read).
+    constexpr size_t kAhead = 2;
+    for (size_t k = 0; k < std::min(kAhead, s_.bricks.size()); ++k) {
+        const Brick& first = tree_.bricks[s_.bricks[k].brick];
+        prefetchRange(eye_.position, first.firstSample, first.firstSample + first.sampleCount);
+    }
     for (size_t k = 0; k < s_.bricks.size(); ++k) {
-        const kd_detail::MetBrick& met = s_.bricks[k];
-        // The next brick's positions, asked for again: asked for when the walk worked on the
-        // brick, they have left L1 since.
-        if (k + 1 < s_.bricks.size()) {
-            const Brick& next = tree_.bricks[s_.bricks[k + 1].brick];
-            prefetchRange(eye_.position, next.firstSample, next.firstSample + next.sampleCount);
+        if (k + kAhead < s_.bricks.size()) {
+            const Brick& ahead = tree_.bricks[s_.bricks[k + kAhead].brick];
+            prefetchRange(eye_.position, ahead.firstSample, ahead.firstSample + ahead.sampleCount);
         }
+        const kd_detail::MetBrick& met = s_.bricks[k];
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
             visit(static_cast<const uint32_t*>(s_.unshadowed.data()), s_.unshadowed.size());
