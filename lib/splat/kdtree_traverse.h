@@ -268,9 +268,14 @@ private:
         Node node;
     };
     static constexpr unsigned kLeafLag = 8;  // leaves met before the first is worked on
-    // Always inlined: GCC takes a function whose only effects are prefetches for one without
-    // effects, and drops the calls to it when it is not inlined early.
+    // A met brick's payload and voxel counts; a kept brick's sample positions. Always inlined:
+    // GCC takes a function whose only effects are prefetches for one without effects, and drops
+    // the calls to it when it is not inlined early.
     __attribute__((always_inline)) void prefetchBrick(Node node) const;
+    __attribute__((always_inline)) void prefetchPositions(const kd_detail::MetBrick& met) const {
+        const Brick& brick = tree_.bricks[met.brick];
+        prefetchRange(eye_.position, brick.firstSample, brick.firstSample + brick.sampleCount);
+    }
     void gatherLeaf(const MetLeaf& leaf);
     void gatherBrick(const StackEntry& e, uint32_t index);
 #if RS_TRAVERSE_AVX512
@@ -433,15 +438,9 @@ void CylinderTraversal::visitSamples(Visit&& visit) {
     // A brick's positions are asked for two bricks ahead of reaching its samples (asked for when
     // the walk met the brick, many had left L1 by the time they were read).
     constexpr size_t kAhead = 2;
-    for (size_t k = 0; k < std::min(kAhead, s_.bricks.size()); ++k) {
-        const Brick& first = tree_.bricks[s_.bricks[k].brick];
-        prefetchRange(eye_.position, first.firstSample, first.firstSample + first.sampleCount);
-    }
+    for (size_t k = 0; k < std::min(kAhead, s_.bricks.size()); ++k) prefetchPositions(s_.bricks[k]);
     for (size_t k = 0; k < s_.bricks.size(); ++k) {
-        if (k + kAhead < s_.bricks.size()) {
-            const Brick& ahead = tree_.bricks[s_.bricks[k + kAhead].brick];
-            prefetchRange(eye_.position, ahead.firstSample, ahead.firstSample + ahead.sampleCount);
-        }
+        if (k + kAhead < s_.bricks.size()) prefetchPositions(s_.bricks[k + kAhead]);
         const kd_detail::MetBrick& met = s_.bricks[k];
         gatherBrickSamples(met);
         if constexpr (std::is_invocable_v<Visit&, const uint32_t*, size_t>)
