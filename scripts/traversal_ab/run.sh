@@ -5,7 +5,8 @@
 # (default 15), radii in voxels (default 4 8). Prints each side's median rate and the median of
 # the pairwise ratios b/a with their range. Builds in a temporary folder with the release
 # build's flags (the dependencies: `scripts/run.sh build` installs them). AB_SECONDS sets a
-# measurement's length (default 0.25 s of side a).
+# measurement's length (default 0.25 s of side a); AB_FLAGS_A and AB_FLAGS_B add compiler
+# flags to one side (e.g. AB_FLAGS_B=-march=x86-64-v3: the same code for another target).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../.." && pwd)
@@ -35,11 +36,12 @@ for side in a b; do
         sources="lib/kdtree.cpp lib/eye.cpp lib/stats.cpp lib/parallel.cpp lib/log.cpp lib/occlusion_grid.cpp lib/error.cpp"
         flat=1
     fi
-    echo "side $side: $rev ($(git -C "$tree" log -1 --format='%h %s' | cut -c1-70))"
+    extra=${AB_FLAGS_A:-}; [ $side = b ] && extra=${AB_FLAGS_B:-}
+    echo "side $side: $rev ($(git -C "$tree" log -1 --format='%h %s' | cut -c1-70))${extra:+, flags $extra}"
     for s in $sources "$here/side.cpp"; do
         src=$s; [ "$s" = "$here/side.cpp" ] || src=$tree/$s
         o=$work/$side-$(basename "$s" .cpp).o
-        c++ $flags -Drs=rs_$side -DRS_AB_FLAT=$flat -I"$tree/lib" -I"$tree/tests" -c "$src" -o "$o" &
+        c++ $flags $extra -Drs=rs_$side -DRS_AB_FLAT=$flat -I"$tree/lib" -I"$tree/tests" -c "$src" -o "$o" &
         objects+=("$o"); pids+=($!)
     done
 done
