@@ -55,6 +55,7 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     if (s_.shadowable.size() < cells + size_t(sizeU_) + 2) s_.shadowable.resize(cells + size_t(sizeU_) + 2, kNoOccluder);
     shadow_ = s_.shadowable.data() + sizeU_ + 1;
     findValidRows();
+    markInvalidCells();
 #if defined(__SSE2__)
     for (int a = 0; a < 3; ++a) {
         wide_.gridOrigin[a] = _mm_set1_ps(g_.origin[a]), wide_.o[a] = _mm_set1_ps(o_[a]), wide_.w[a] = _mm_set1_ps(w_[a]);
@@ -74,10 +75,9 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     if (s_.sampleSlices.size() < slices) s_.sampleSlices.resize(slices, 0), s_.occluderSlices.resize(slices, 0);
 }
 
-// The sweep mask and the shadowable map are all zero between cylinders: clear what this one
-// touched.
+// The shadowable map is all kNoOccluder between cylinders, the slice counts zero: clear what
+// this one touched. (The sweep mask is written whole by the next one.)
 CylinderTraversal::~CylinderTraversal() {
-    for (const OccluderEvent& ev : s_.occluders) s_.sweep[size_t(ev.cell)] = 0.f;
     clearShadowable();
     for (int i = sliceMin_; i <= sliceMax_; ++i) s_.sampleSlices[size_t(i)] = 0;
     for (int i = occluderMin_; i <= occluderMax_; ++i) s_.occluderSlices[size_t(i)] = 0;
@@ -123,6 +123,18 @@ void CylinderTraversal::findValidRows() {
         while (hi > ic && !validCell(hi, jj)) --hi;
         while (validCell(hi + 1, jj)) ++hi;
         s_.rows[size_t(j)] = {lo + halfU_, hi + halfU_};
+    }
+}
+
+// The sweep mask for this cylinder: 0 in the valid cells, kInvalidCell in the others (which
+// no occluder is added to), so that the sixteen-lane steps read a cell's validity with its value
+// instead of gathering its row's range.
+void CylinderTraversal::markInvalidCells() {
+    for (int j = 0; j < sizeV_; ++j) {
+        float* row = &s_.sweep[size_t(sizeU_) * size_t(j)];
+        const int lo = std::max(0, s_.rows[size_t(j)].lo), hi = std::min(sizeU_ - 1, s_.rows[size_t(j)].hi);
+        std::fill(row, row + sizeU_, kInvalidCell);
+        if (lo <= hi) std::fill(row + lo, row + hi + 1, 0.f);
     }
 }
 

@@ -131,6 +131,7 @@ constexpr float kBoxReachSlack = 0.01f;   // voxels: a box of samples is tested 
 constexpr float kSureSlack = 0.01f, kSureSlackPerSize = 1e-5f, kSureSlack2PerSize2 = 4e-5f;
 constexpr float kOctantEdge = 1e-3f;      // voxels: a brick's octant faces, widened past the positions' rounding
 constexpr uint16_t kNoOccluder = 0xffff;  // the shadowable map's "no occluder in this block"
+constexpr float kInvalidCell = -1.f;      // the sweep mask's value in a cell that is not valid
 constexpr size_t kEventSlack = 16;         // sample lists: room past the last entry, for sixteen-lane stores
 
 namespace kd_detail {
@@ -211,7 +212,7 @@ Overloaded(Fns...) -> Overloaded<Fns...>;
 class TraversalScratch {
 public:
     std::vector<kd_detail::StackEntry> stack;
-    std::vector<float> sweep;
+    std::vector<float> sweep;  // the mask's cells: occlusion summed so far, kInvalidCell where not valid
     // Per mask cell (a row and a cell in front): the first slice of an occluder in one of the 2×2
     // cells from it on (kNoOccluder: none).
     std::vector<uint16_t> shadowable;
@@ -252,6 +253,7 @@ private:
 
     // Mask set-up.
     void findValidRows();
+    void markInvalidCells();
     bool validCell(int i, int j) const;  // relative to the mask centre
     bool validMaskCell(int i, int j) const { return i >= s_.rows[size_t(j)].lo && i <= s_.rows[size_t(j)].hi; }
     // A cell of the mask that is not valid: no sample reads it, so a voxel projecting there is no

@@ -98,10 +98,10 @@ __attribute__((target("avx512f"))) inline void gatherPairs(__mmask16 active, __m
     odd = _mm512_permutex2var_epi32(a, _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31), b);
 }
 
-// A bilinear weight, made 0 where cell i lies outside its row's valid range [lo, hi].
-__attribute__((target("avx512f"))) inline __m512 validWeight(__m512i i, __m512i lo, __m512i hi, __m512 w) {
-    const __mmask16 outside = _mm512_cmp_epi32_mask(i, lo, _MM_CMPINT_LT) | _mm512_cmp_epi32_mask(i, hi, _MM_CMPINT_NLE);
-    return _mm512_maskz_mov_ps(__mmask16(~outside), w);
+// A bilinear weight, made 0 where the cell is not valid (its value, as an integer, negative:
+// kInvalidCell; a valid cell's sum is +0 or more).
+__attribute__((target("avx512f"))) inline __m512 validWeight(__m512i cell, __m512 w) {
+    return _mm512_maskz_mov_ps(_mm512_cmp_epi32_mask(cell, _mm512_setzero_si512(), _MM_CMPINT_NLT), w);
 }
 
 // weight × min(1, cell value).
@@ -170,7 +170,7 @@ __attribute__((target("avx512f"), always_inline)) inline void writeEvents16(__mm
 // the brick's four layers (a wall across x or y has four candidates a layer: one group for the
 // brick where there were four), then the tangent test, the sure met test and the centres' cells
 // in lanes, the same operations in the same order as the four-lane step; the valid-cell test by
-// gathers of the rows' ranges; the exact met test and the occluder for the lanes left, in bit
+// a gather of the cells' values (markInvalidCells); the exact met test and the occluder for the lanes left, in bit
 // order.
 __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders16(const StackEntry& e, const Brick& brick,
                                                                                    uint64_t candidates) {
@@ -193,7 +193,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
     }
     const __m512 half = _mm512_set1_ps(0.5f), zero = _mm512_setzero_ps();
     const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
-    const int32_t* rows = &s_.rows[0].lo;
+    const float* sweep = s_.sweep.data();
     for (int group = 0; group < count; group += 16) {
         const __mmask16 bits = firstLanes(count - group);
         const __m512i b = _mm512_loadu_si512(bitOf + group);
@@ -212,14 +212,13 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
                                        _CMP_LT_OS);
         const __m512i cu = _mm512_add_epi32(floor16(dot16(aU, d[0], d[1], d[2])), _mm512_set1_epi32(halfU_));
         const __m512i cv = _mm512_add_epi32(floor16(dot16(aV, d[0], d[1], d[2])), _mm512_set1_epi32(halfV_));
-        // invalidCell: inside the mask and outside its row's valid range.
+        // invalidCell: inside the mask and holding kInvalidCell (no occluder is in the mask yet,
+        // so a valid cell holds +0).
         const __mmask16 inMask =
             _mm512_mask_cmp_epu32_mask(_mm512_mask_cmp_epu32_mask(front, cu, sizeU, _MM_CMPINT_LT), cv, sizeV, _MM_CMPINT_LT);
-        const __m512i rowLo = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_slli_epi32(cv, 1), rows, 4);
-        const __m512i rowHi =
-            _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_add_epi32(_mm512_slli_epi32(cv, 1), _mm512_set1_epi32(1)), rows, 4);
-        const __mmask16 invalid = _mm512_mask_cmp_epi32_mask(inMask, cu, rowLo, _MM_CMPINT_LT) |
-                                  _mm512_mask_cmp_epi32_mask(inMask, cu, rowHi, _MM_CMPINT_NLE);
+        const __m512i value = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_add_epi32(cu, _mm512_mullo_epi32(cv, sizeU)),
+                                                          sweep, 4);
+        const __mmask16 invalid = _mm512_mask_cmp_epi32_mask(inMask, value, _mm512_setzero_si512(), _MM_CMPINT_LT);
         const unsigned keep = unsigned(front & ~invalid);
         if (!keep) continue;
         alignas(64) int32_t cus[16], cvs[16];
@@ -386,8 +385,8 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherSampleRange16(c
 
 // read() for `count` (1…16) consecutive sample events, lane by lane the same operations in the
 // same order (so the same values): the events' u and v turned to lanes, each block's two cell
-// pairs and its rows' valid ranges (lo₀ hi₀ lo₁ hi₁, side by side) read eight lanes at a time
-// as 64-bit pairs. Writes the index and V of the events with V > 0, in event order, and returns
+// pairs read eight lanes at a time as 64-bit pairs, a cell's validity with its value
+// (markInvalidCells). Writes the index and V of the events with V > 0, in event order, and returns
 // how many.
 __attribute__((target("avx512f"))) int CylinderTraversal::read16(const SampleEvent* ev, int count, uint32_t index[16],
                                                                    float vis[16]) const {
@@ -415,22 +414,17 @@ __attribute__((target("avx512f"))) int CylinderTraversal::read16(const SampleEve
         }
         return lit;
     }
-    // 64-bit reads, eight lanes at a time: the cells (c, c + 1) of rows j0 and j0 + 1, and the
-    // ranges (lo, hi) of rows j0 and j0 + 1; then the pairs split into lanes.
+    // 64-bit reads, eight lanes at a time: the cells (c, c + 1) of rows j0 and j0 + 1, then the
+    // pairs split into lanes. An invalid cell holds kInvalidCell: its weight is made 0.
     const __m512i cell = _mm512_add_epi32(i0, _mm512_mullo_epi32(j0, _mm512_set1_epi32(sizeU_)));
-    const __m512i nextRow = _mm512_add_epi32(cell, _mm512_set1_epi32(sizeU_)), row = _mm512_slli_epi32(j0, 1);
-    const __m512i rowNext = _mm512_add_epi32(row, _mm512_set1_epi32(2));
+    const __m512i nextRow = _mm512_add_epi32(cell, _mm512_set1_epi32(sizeU_));
     const double* sweep = reinterpret_cast<const double*>(s_.sweep.data());
-    const long long* rows = reinterpret_cast<const long long*>(s_.rows.data());
-    __m512i c00, c10, c01, c11, lo0, hi0, lo1, hi1;
+    __m512i c00, c10, c01, c11;
     gatherPairs(active, cell, sweep, c00, c10);
     gatherPairs(active, nextRow, sweep, c01, c11);
-    gatherPairs(active, row, rows, lo0, hi0);
-    gatherPairs(active, rowNext, rows, lo1, hi1);
-    const __m512i i1 = _mm512_add_epi32(i0, _mm512_set1_epi32(1));
     const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
-    const __m512 w0 = validWeight(i0, lo0, hi0, _mm512_mul_ps(gx, gy)), w1 = validWeight(i1, lo0, hi0, _mm512_mul_ps(fx, gy));
-    const __m512 w2 = validWeight(i0, lo1, hi1, _mm512_mul_ps(gx, fy)), w3 = validWeight(i1, lo1, hi1, _mm512_mul_ps(fx, fy));
+    const __m512 w0 = validWeight(c00, _mm512_mul_ps(gx, gy)), w1 = validWeight(c10, _mm512_mul_ps(fx, gy));
+    const __m512 w2 = validWeight(c01, _mm512_mul_ps(gx, fy)), w3 = validWeight(c11, _mm512_mul_ps(fx, fy));
     // (t0 + t2) + (t1 + t3), as read() adds its lanes.
     const __m512 num = _mm512_add_ps(_mm512_add_ps(cellTerm(w0, c00), cellTerm(w2, c01)), _mm512_add_ps(cellTerm(w1, c10), cellTerm(w3, c11)));
     const __m512 den = _mm512_add_ps(_mm512_add_ps(w0, w2), _mm512_add_ps(w1, w3));
