@@ -164,6 +164,29 @@ __attribute__((target("avx512f"), always_inline)) inline void writeEvents16(__mm
     _mm512_storeu_si512(out + 12, _mm512_shuffle_i32x4(q2, q3, _MM_SHUFFLE(3, 1, 3, 1)));
 }
 
+// Occluder events {cell, slice, occ} (twelve bytes) of the `keep` lanes, compressed and
+// interleaved, sixteen stored whole at `out` (the list has room to spare past its end).
+__attribute__((target("avx512f"), always_inline)) inline void writeOccluders16(__mmask16 keep, __m512i cell, __m512i slice,
+                                                                               __m512 occ, OccluderEvent* out) {
+    static_assert(sizeof(OccluderEvent) == 12, "an occluder event is three 32-bit words: cell, slice, occ");
+    const __m512i c = _mm512_maskz_compress_epi32(keep, cell), s = _mm512_maskz_compress_epi32(keep, slice);
+    const __m512i o = _mm512_castps_si512(_mm512_maskz_compress_ps(keep, occ));
+    // Word d of the three vectors is field d mod 3 of event d / 3: the cells and slices by one
+    // two-source permute, the occlusions put in by a masked one.
+    static const int32_t cellSlice[3][16] = {{0, 16, 0, 1, 17, 0, 2, 18, 0, 3, 19, 0, 4, 20, 0, 5},
+                                             {21, 0, 6, 22, 0, 7, 23, 0, 8, 24, 0, 9, 25, 0, 10, 26},
+                                             {0, 11, 27, 0, 12, 28, 0, 13, 29, 0, 14, 30, 0, 15, 31, 0}};
+    static const int32_t event[3][16] = {{0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4, 5},
+                                         {5, 5, 6, 6, 6, 7, 7, 7, 8, 8, 8, 9, 9, 9, 10, 10},
+                                         {10, 11, 11, 11, 12, 12, 12, 13, 13, 13, 14, 14, 14, 15, 15, 15}};
+    constexpr __mmask16 occWord[3] = {0x4924, 0x2492, 0x9249};
+    int32_t* words = reinterpret_cast<int32_t*>(out);
+    for (int j = 0; j < 3; ++j) {
+        const __m512i cs = _mm512_permutex2var_epi32(c, _mm512_loadu_si512(cellSlice[j]), s);
+        _mm512_storeu_si512(words + 16 * j, _mm512_mask_permutexvar_epi32(cs, occWord[j], _mm512_loadu_si512(event[j]), o));
+    }
+}
+
 }  // namespace
 
 // gatherBrick's candidates sixteen at a time, in bit order: their bit numbers compressed out of
@@ -194,6 +217,10 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
     const __m512 half = _mm512_set1_ps(0.5f), zero = _mm512_setzero_ps();
     const __m512i sizeU = _mm512_set1_epi32(sizeU_), sizeV = _mm512_set1_epi32(sizeV_);
     const float* sweep = s_.sweep.data();
+    const VoxelOcclusion* voxels = tree_.voxels.data();
+    // Room for every candidate's event and a whole vector's more.
+    size_t n = s_.occluders.size();
+    s_.occluders.resize(n + size_t(count) + kEventSlack);
     for (int group = 0; group < count; group += 16) {
         const __mmask16 bits = firstLanes(count - group);
         const __m512i b = _mm512_loadu_si512(bitOf + group);
@@ -219,16 +246,65 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
         const __m512i value = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), inMask, _mm512_add_epi32(cu, _mm512_mullo_epi32(cv, sizeU)),
                                                           sweep, 4);
         const __mmask16 invalid = _mm512_mask_cmp_epi32_mask(inMask, value, _mm512_setzero_si512(), _MM_CMPINT_LT);
-        const unsigned keep = unsigned(front & ~invalid);
+        const __mmask16 keep = front & ~invalid;
         if (!keep) continue;
-        alignas(64) int32_t cus[16], cvs[16];
-        _mm512_store_si512(cus, cu), _mm512_store_si512(cvs, cv);
-        for (unsigned k = keep; k; k &= k - 1) {
+        // The exact met test for the lanes the sure one left, lane by lane (few are).
+        __mmask16 met = keep & sure;
+        for (unsigned k = keep & ~sure; k; k &= k - 1) {
             const int l = __builtin_ctz(k), bit = bitOf[group + l];
-            const int v[3] = {e.lo[0] + (bit & 3), e.lo[1] + (bit >> 2 & 3), e.lo[2] + (bit >> 4)};
-            if (sure >> l & 1u || voxelMet(v[0], v[1], v[2])) addOccluderAt(cus[l], cvs[l], v[N_], brickVoxel(brick, bit));
+            if (voxelMet(e.lo[0] + (bit & 3), e.lo[1] + (bit >> 2 & 3), e.lo[2] + (bit >> 4))) met |= __mmask16(1u << l);
         }
+        if (!met) continue;
+        // Where the met voxels' counts are: the rank of a bit among the occupied ones.
+        alignas(64) int32_t at[16];
+        for (unsigned k = met; k; k &= k - 1) {
+            const int l = __builtin_ctz(k);
+            at[l] = int32_t(brick.firstVoxel) + __builtin_popcountll(brick.occupied & ((uint64_t(1) << bitOf[group + l]) - 1));
+        }
+        const __m512i voxel = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), met, _mm512_maskz_loadu_epi32(met, at),
+                                                          voxels, 4);
+        n = addOccluders16(met, voxel, vi[N_], cu, cv, inMask, n);
     }
+    s_.occluders.resize(n);
+}
+
+// addOccluderAt for the `met` lanes (voxel counts, layer along N, cell), the same operations in
+// the same order, so the same events in the same (bit) order, written at s_.occluders[n]; returns
+// the list's new end.
+__attribute__((target("avx512f"))) size_t CylinderTraversal::addOccluders16(__mmask16 met, __m512i voxel, __m512i layer, __m512i cu,
+                                                                             __m512i cv, __mmask16 inMask, size_t n) {
+    // occ = min(1, Σ_a occWeight_a · count(side_a)), summed from a = 0 as addOccluderAt does.
+    __m512 occ = _mm512_setzero_ps();
+    for (int a = 0; a < 3; ++a) {
+        const __m512i count = _mm512_and_si512(_mm512_srlv_epi32(voxel, _mm512_set1_epi32(5 * side_[a])), _mm512_set1_epi32(31));
+        occ = _mm512_add_ps(occ, _mm512_mul_ps(_mm512_set1_ps(occWeight_[a]), _mm512_cvtepi32_ps(count)));
+    }
+    occ = _mm512_min_ps(occ, _mm512_set1_ps(1.f));
+    const __mmask16 occludes = _mm512_mask_cmp_ps_mask(met, occ, _mm512_setzero_ps(), _CMP_GT_OQ);
+    // The slice: the layer's, pushed by ambOffset_ of the dominant axis where ambiguous (both
+    // counts of an axis non-zero).
+    const __m512i field = _mm512_set1_epi32(31);
+    __mmask16 ambiguous = 0;
+    for (int a = 0; a < 3; ++a)
+        ambiguous |= _mm512_test_epi32_mask(voxel, _mm512_slli_epi32(field, 10 * a)) &
+                     _mm512_test_epi32_mask(voxel, _mm512_slli_epi32(field, 10 * a + 5));
+    const __m512i offset = _mm512_permutexvar_epi32(_mm512_srli_epi32(voxel, 30), _mm512_setr_epi32(ambOffset_[0], ambOffset_[1],
+                                                                                                      ambOffset_[2], 0, 0, 0, 0, 0, 0,
+                                                                                                      0, 0, 0, 0, 0, 0, 0));
+    __m512i slice = forward_ ? layer : _mm512_sub_epi32(_mm512_set1_epi32(dimN_ - 1), layer);
+    slice = _mm512_mask_add_epi32(slice, ambiguous, slice, offset);
+    st_.maskOverflow += uint64_t(__builtin_popcount(occludes & ~inMask));
+    const __mmask16 keep = occludes & inMask;
+    if (!keep) return n;
+    writeOccluders16(keep, _mm512_add_epi32(cu, _mm512_mullo_epi32(cv, _mm512_set1_epi32(sizeU_))), slice, occ, &s_.occluders[n]);
+    alignas(64) int32_t slices[16];
+    _mm512_store_si512(slices, _mm512_maskz_compress_epi32(keep, slice));
+    const int kept = __builtin_popcount(keep);
+    for (int k = 0; k < kept; ++k) ++s_.occluderSlices[size_t(slices[k])];
+    occluderMin_ = std::min(occluderMin_, _mm512_mask_reduce_min_epi32(keep, slice));
+    occluderMax_ = std::max(occluderMax_, _mm512_mask_reduce_max_epi32(keep, slice));
+    st_.occluders += uint64_t(kept);
+    return n + size_t(kept);
 }
 
 // boxTests4 for a divided brick's eight octants at once (octant k: x + 2, y + 2, z + 2 at its
