@@ -601,6 +601,48 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
     std::printf("  %zu visits (%zu partly occluded) the same on both paths\n", visits, partial);
 }
 
+// The mask's valid cells as the sixteen-lane set-up finds them (every cell tested, the rows
+// that may reach past the mask left to the row-by-row search) against the row-by-row search
+// alone: the same ranges and the same sweep mask (0 in valid cells, kInvalidCell elsewhere),
+// for axis-aligned, diagonal and random directions and radii from half a voxel to forty.
+TEST(OcclusionTreeTraversal, WideValidCellsAreTheFourLaneOnes) {
+    if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::normal_distribution<float> gauss;
+    ThreadPool pool(1);
+    const IVec3 dims(24, 24, 24);
+    OcclusionGrid grid = randomGrid(rng, dims, 0.02f);
+    EyeSamples samples = makeSamples(grid.geometry, randomPoints(rng, dims, 500));
+    OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
+    size_t rows = 0, validCells = 0;
+    for (int c = 0; c < 3000; ++c) {
+        Cylinder cyl;
+        cyl.origin = Vec3(u01(rng), u01(rng), u01(rng)) * Vec3(dims);
+        if (c % 5 == 0) cyl.dir = Vec3(0.f), cyl.dir[c % 3] = c % 2 ? 1.f : -1.f;  // along an axis
+        else if (c % 5 == 1) cyl.dir = glm::normalize(Vec3(c % 2 ? 1.f : -1.f, 1.f, c % 3 ? 1.f : -1.f));
+        else cyl.dir = glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+        cyl.radius = 0.5f + 39.5f * u01(rng) * u01(rng);
+        cyl.length = 10.f;
+        TraversalScratch scratch[2];
+        for (int wide = 0; wide < 2; ++wide) {
+            ASSERT_TRUE(setTraversalWide(wide == 1));
+            CylinderTraversal traversal(tree, samples, cyl, scratch[wide]);
+        }
+        ASSERT_EQ(scratch[0].rows.size(), scratch[1].rows.size());
+        for (size_t j = 0; j < scratch[0].rows.size(); ++j) {
+            ASSERT_EQ(scratch[0].rows[j].lo, scratch[1].rows[j].lo) << "cylinder " << c << " row " << j;
+            ASSERT_EQ(scratch[0].rows[j].hi, scratch[1].rows[j].hi) << "cylinder " << c << " row " << j;
+        }
+        ASSERT_EQ(scratch[0].sweep, scratch[1].sweep) << "cylinder " << c;
+        rows += scratch[0].rows.size();
+        validCells += size_t(std::count(scratch[0].sweep.begin(), scratch[0].sweep.end(), 0.f));
+    }
+    setTraversalWide(true);
+    EXPECT_GT(rows, 30000u);  // not vacuous
+    EXPECT_GT(validCells, 100000u);
+}
+
 // A visitor of lists (as the splat's: V = 1 a brick at a time, the swept samples that see light
 // a read at a time, the samples ahead announced) gets the same visits, in the same order, with
 // the same V to the bit, as one taking them one by one; and each after it was told of it. On

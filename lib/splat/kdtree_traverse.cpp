@@ -99,31 +99,34 @@ bool CylinderTraversal::validCell(int i, int j) const {
 // that they agree with it exactly.
 void CylinderTraversal::findValidRows() {
     if (s_.rows.size() < size_t(sizeV_)) s_.rows.resize(size_t(sizeV_));
+#if RS_TRAVERSE_AVX512
+    if (sixteen_) return findValidRows16();
+#endif
+    for (int j = 0; j < sizeV_; ++j) s_.rows[size_t(j)] = findValidRow(j);
+}
+
+// Row j's valid cells, as findValidRows states it.
+RowRange CylinderTraversal::findValidRow(int j) const {
     const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_], qc = 1.f - w_[V_] * w_[V_];
-    for (int j = 0; j < sizeV_; ++j) {
-        const int jj = j - halfV_;
-        const float y = float(jj) + 0.5f;
-        // Q(x) = qa x² − 2 qb x y + qc y², x = i + ½ (relative to the mask centre).
-        const float xc = qb * y / qa;
-        int ic = int(std::floor(xc));  // x = ic + ½ is the cell centre nearest the minimum
-        if (!validCell(ic, jj)) {
-            if (validCell(ic - 1, jj)) --ic;
-            else if (validCell(ic + 1, jj)) ++ic;
-            else {
-                s_.rows[size_t(j)] = {INT_MAX / 2, INT_MIN / 2};
-                continue;
-            }
-        }
-        const float disc = std::max(0.f, qb * qb * y * y - qa * (qc * y * y - valid2_));
-        const float half = std::sqrt(disc) / qa;
-        int lo = std::min(ic, int(std::floor(xc - half - 0.5f)) + 1);
-        int hi = std::max(ic, int(std::floor(xc + half - 0.5f)));
-        while (lo < ic && !validCell(lo, jj)) ++lo;
-        while (validCell(lo - 1, jj)) --lo;
-        while (hi > ic && !validCell(hi, jj)) --hi;
-        while (validCell(hi + 1, jj)) ++hi;
-        s_.rows[size_t(j)] = {lo + halfU_, hi + halfU_};
+    const int jj = j - halfV_;
+    const float y = float(jj) + 0.5f;
+    // Q(x) = qa x² − 2 qb x y + qc y², x = i + ½ (relative to the mask centre).
+    const float xc = qb * y / qa;
+    int ic = int(std::floor(xc));  // x = ic + ½ is the cell centre nearest the minimum
+    if (!validCell(ic, jj)) {
+        if (validCell(ic - 1, jj)) --ic;
+        else if (validCell(ic + 1, jj)) ++ic;
+        else return {INT_MAX / 2, INT_MIN / 2};
     }
+    const float disc = std::max(0.f, qb * qb * y * y - qa * (qc * y * y - valid2_));
+    const float half = std::sqrt(disc) / qa;
+    int lo = std::min(ic, int(std::floor(xc - half - 0.5f)) + 1);
+    int hi = std::max(ic, int(std::floor(xc + half - 0.5f)));
+    while (lo < ic && !validCell(lo, jj)) ++lo;
+    while (validCell(lo - 1, jj)) --lo;
+    while (hi > ic && !validCell(hi, jj)) --hi;
+    while (validCell(hi + 1, jj)) ++hi;
+    return {lo + halfU_, hi + halfU_};
 }
 
 // The sweep mask for this cylinder: 0 in the valid cells, kInvalidCell in the others (which

@@ -253,6 +253,10 @@ private:
 
     // Mask set-up.
     void findValidRows();
+    kd_detail::RowRange findValidRow(int j) const;
+#if RS_TRAVERSE_AVX512
+    void findValidRows16();
+#endif
     void markInvalidCells();
     bool validCell(int i, int j) const;  // relative to the mask centre
     bool validMaskCell(int i, int j) const { return i >= s_.rows[size_t(j)].lo && i <= s_.rows[size_t(j)].hi; }

@@ -189,6 +189,45 @@ __attribute__((target("avx512f"), always_inline)) inline void writeOccluders16(_
 
 }  // namespace
 
+// findValidRows with every cell of the mask tested, sixteen at a time, by validCell's operations
+// (with q_N = 0 its dot products are q_U ω_U + q_V ω_V and q_U² + q_V², to the bit): a row whose
+// valid cells are one run inside the mask, not touching its sides, is that run; another (empty in
+// the mask, or one that may go on past it) is left to findValidRow, so that the rows are the same.
+__attribute__((target("avx512f"))) void CylinderTraversal::findValidRows16() {
+    const __m512 wU = _mm512_set1_ps(w_[U_]), wV = _mm512_set1_ps(w_[V_]), valid2 = _mm512_set1_ps(valid2_);
+    const __m512 half = _mm512_set1_ps(0.5f);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const int chunks = (sizeU_ + 15) / 16;
+    const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_];  // as findValidRow has them
+    for (int j = 0; j < sizeV_; ++j) {
+        const __m512 qV = _mm512_add_ps(_mm512_set1_ps(float(j - halfV_)), half);
+        const __m512 b = _mm512_mul_ps(qV, wV), qV2 = _mm512_mul_ps(qV, qV);
+        int lo = -1, hi = -1;
+        bool run = true;  // the valid cells so far are one run
+        for (int c = 0; c < chunks && run; ++c) {
+            const __m512 qU = _mm512_add_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(lane, _mm512_set1_epi32(16 * c - halfU_))), half);
+            const __m512 along = _mm512_add_ps(_mm512_mul_ps(qU, wU), b);
+            const __m512 dd = _mm512_add_ps(_mm512_mul_ps(qU, qU), qV2);
+            const unsigned valid = unsigned(_mm512_mask_cmp_ps_mask(firstLanes(sizeU_ - 16 * c), _mm512_sub_ps(dd, _mm512_mul_ps(along, along)),
+                                                                    valid2, _CMP_LE_OQ));
+            if (!valid) continue;
+            const int first = 16 * c + __builtin_ctz(valid), last = 16 * c + 31 - __builtin_clz(valid);
+            if (hi >= 0 && first != hi + 1) run = false;  // a gap, or a run that does not go on
+            if (valid != ((2u << (last - 16 * c)) - (1u << (first - 16 * c)))) run = false;
+            if (lo < 0) lo = first;
+            hi = last;
+        }
+        if (lo < 0) {
+            // No valid cell in the mask: findValidRow finds none either when the three cells it
+            // tries first, around the minimum of the row's distances, lie in the mask.
+            const int ic = int(std::floor(qb * (float(j - halfV_) + 0.5f) / qa)) + halfU_;
+            s_.rows[size_t(j)] = ic >= 1 && ic < sizeU_ - 1 ? RowRange{INT_MAX / 2, INT_MIN / 2} : findValidRow(j);
+            continue;
+        }
+        s_.rows[size_t(j)] = run && lo > 0 && hi < sizeU_ - 1 ? RowRange{lo, hi} : findValidRow(j);
+    }
+}
+
 // gatherBrick's candidates sixteen at a time, in bit order: their bit numbers compressed out of
 // the brick's four layers (a wall across x or y has four candidates a layer: one group for the
 // brick where there were four), then the tangent test, the sure met test and the centres' cells
