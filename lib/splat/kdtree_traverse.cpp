@@ -407,11 +407,13 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
         boxTests4(partLo, partHi, m, su, rect[group]);
         may |= m << (4 * group), sure |= su << (4 * group);
     }
-    // Octants read one after another with the same test are read as one range (the same tests
-    // of the same samples, in fewer, fuller groups of lanes). Walked over the bits of the octants
+    // Octants read one after another are read as one range, in fewer, fuller groups of lanes:
+    // its samples tested one by one unless all its octants are surely reached (a surely reached
+    // sample passes the test: the same answers either way). Walked over the bits of the octants
     // to read (holding samples, may be reached): an octant taken whole, or a run from the first
-    // octant left up to the next octant with samples that is taken, skipped or read with the
-    // other test (octants without samples are passed over).
+    // octant left up to the next octant with samples that is taken or skipped (octants without
+    // samples are passed over). Runs were cut where the test changed, until splitting them cost
+    // more than the tests it saved.
     const uint32_t todoAll = may & brick.octantsFilled;
     uint32_t take = 0;
     for (uint32_t bits = todoAll & sure; bits; bits &= bits - 1) {
@@ -427,11 +429,10 @@ void CylinderTraversal::gatherOctants(const MetBrick& met, const Vec3& lo, const
             todo &= todo - 1;
             continue;
         }
-        const bool runSure = sure >> k & 1u;
-        const uint32_t run = runSure ? read & sure : read & ~sure;
-        const uint32_t stop = brick.octantsFilled & ~run & ~((2u << k) - 1u);
+        const uint32_t stop = brick.octantsFilled & ~read & ~((2u << k) - 1u);
         const int end = stop ? __builtin_ctz(stop) : 8;  // the run is octants [k, end)
-        gatherSampleRange(met.entry, brick.octantBegin(k), brick.octantEnd(end - 1), runSure, n, listed);
+        const uint32_t run = read & ((1u << end) - 1u) & ~((1u << k) - 1u);
+        gatherSampleRange(met.entry, brick.octantBegin(k), brick.octantEnd(end - 1), (run & ~sure) == 0, n, listed);
         todo &= ~((1u << end) - 1u);
     }
 #else
