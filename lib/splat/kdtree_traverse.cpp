@@ -197,7 +197,7 @@ void CylinderTraversal::gatherLeaf(const MetLeaf& leaf) {
 
 // Shrink the cylinder bounds to each child: the far child goes on the stack, the near one
 // replaces e (false when the cylinder misses it).
-bool CylinderTraversal::descend(StackEntry& e, Node node) {
+inline bool CylinderTraversal::descend(StackEntry& e, Node node) {
     const int a = node.axis();
     const float plane = float(node.plane());
     StackEntry lower = e, upper = e;
