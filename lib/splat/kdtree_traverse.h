@@ -287,7 +287,8 @@ private:
     void gatherBrick(const StackEntry& e, uint32_t index);
 #if RS_TRAVERSE_AVX512
     void gatherBrickOccluders16(const StackEntry& e, const Brick& brick, uint64_t candidates);
-    size_t addOccluders16(__mmask16 met, __m512i voxel, __m512i layer, __m512i cu, __m512i cv, __mmask16 inMask, size_t n);
+    __attribute__((target("avx512f"))) size_t addOccluders16(__mmask16 met, __m512i voxel, __m512i layer, __m512i cu, __m512i cv,
+                                                              __mmask16 inMask, size_t n);
 #endif
     void gatherOcclusionBlock(const StackEntry& e, Node node);
     // The counts of a brick's voxel: the rank of its bit among the occupied ones is where they are.
