@@ -110,8 +110,7 @@ RowRange CylinderTraversal::findValidRow(int j) const {
     const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_], qc = 1.f - w_[V_] * w_[V_];
     const int jj = j - halfV_;
     const float y = float(jj) + 0.5f;
-    // Q(x) = qa x² − 2 qb x y + qc y², x = i + ½ (relative to the mask centre).
-    const float xc = qb * y / qa;
+    const float xc = rowMinimum(j);
     int ic = int(std::floor(xc));  // x = ic + ½ is the cell centre nearest the minimum
     if (!validCell(ic, jj)) {
         if (validCell(ic - 1, jj)) --ic;

@@ -254,6 +254,12 @@ private:
     // Mask set-up.
     void findValidRows();
     kd_detail::RowRange findValidRow(int j) const;
+    // Where row j's distances² to the axis, Q(x) = qa x² − 2 qb x y + qc y² (x = i + ½, y = j + ½,
+    // relative to the mask centre), are least: x = qb y / qa.
+    float rowMinimum(int j) const {
+        const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_];
+        return qb * (float(j - halfV_) + 0.5f) / qa;
+    }
 #if RS_TRAVERSE_AVX512
     void findValidRows16();
 #endif

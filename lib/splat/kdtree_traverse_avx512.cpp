@@ -198,7 +198,6 @@ __attribute__((target("avx512f"))) void CylinderTraversal::findValidRows16() {
     const __m512 half = _mm512_set1_ps(0.5f);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const int chunks = (sizeU_ + 15) / 16;
-    const float qa = 1.f - w_[U_] * w_[U_], qb = w_[U_] * w_[V_];  // as findValidRow has them
     for (int j = 0; j < sizeV_; ++j) {
         const __m512 qV = _mm512_add_ps(_mm512_set1_ps(float(j - halfV_)), half);
         const __m512 b = _mm512_mul_ps(qV, wV), qV2 = _mm512_mul_ps(qV, qV);
@@ -220,7 +219,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::findValidRows16() {
         if (lo < 0) {
             // No valid cell in the mask: findValidRow finds none either when the three cells it
             // tries first, around the minimum of the row's distances, lie in the mask.
-            const int ic = int(std::floor(qb * (float(j - halfV_) + 0.5f) / qa)) + halfU_;
+            const int ic = int(std::floor(rowMinimum(j))) + halfU_;
             s_.rows[size_t(j)] = ic >= 1 && ic < sizeU_ - 1 ? RowRange{INT_MAX / 2, INT_MIN / 2} : findValidRow(j);
             continue;
         }
@@ -232,8 +231,8 @@ __attribute__((target("avx512f"))) void CylinderTraversal::findValidRows16() {
 // the brick's four layers (a wall across x or y has four candidates a layer: one group for the
 // brick where there were four), then the tangent test, the sure met test and the centres' cells
 // in lanes, the same operations in the same order as the four-lane step; the valid-cell test by
-// a gather of the cells' values (markInvalidCells); the exact met test and the occluder for the lanes left, in bit
-// order.
+// a gather of the cells' values (markInvalidCells); the exact met test for the lanes the sure
+// one left, lane by lane; then the met voxels' occluders in lanes (addOccluders16), in bit order.
 __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders16(const StackEntry& e, const Brick& brick,
                                                                                    uint64_t candidates) {
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), three = _mm512_set1_epi32(3);
