@@ -125,7 +125,7 @@ uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) 
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     RTCRay16 rays;
-    int valid[kPacket];
+    alignas(64) int valid[kPacket];
     for (int i = 0; i < kPacket; ++i) {
         const bool live = i < count;
         valid[i] = live ? -1 : 0;
@@ -140,6 +140,34 @@ uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) 
     for (int i = 0; i < count; ++i)
         if (rays.tfar[i] < 0.f) hidden |= 1u << i;
     return hidden;
+}
+
+uint32_t RayAccel::intersectParallel(const Vec3* from, int count, const Vec3& dir, const float* tmax, float* t,
+                                     uint32_t* tri) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCRayHit16 rh;
+    alignas(64) int valid[kPacket];
+    for (int i = 0; i < kPacket; ++i) {
+        const bool live = i < count;
+        valid[i] = live ? -1 : 0;
+        const Vec3 o = live ? from[i] : from[0];
+        rh.ray.org_x[i] = o.x, rh.ray.org_y[i] = o.y, rh.ray.org_z[i] = o.z;
+        rh.ray.dir_x[i] = dir.x, rh.ray.dir_y[i] = dir.y, rh.ray.dir_z[i] = dir.z;
+        rh.ray.tnear[i] = 0.f, rh.ray.tfar[i] = live ? tmax[i] : 0.f, rh.ray.time[i] = 0.f;
+        rh.ray.mask[i] = 0xffffffffu, rh.ray.id[i] = uint32_t(i), rh.ray.flags[i] = 0;
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, impl_->scene, &ctx, &rh);
+    uint32_t hits = 0;
+    for (int i = 0; i < count; ++i) {
+        if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
+        hits |= 1u << i;
+        t[i] = rh.ray.tfar[i];
+        tri[i] = rh.hit.primID[i];
+    }
+    return hits;
 }
 
 }  // namespace rs

@@ -34,6 +34,10 @@ public:
     // they share an end). Bit i of the result: something lies strictly between from[i] and to.
     static constexpr int kPacket = 16;
     uint32_t occludedToPoint(const Vec3* from, int count, const Vec3& to) const;
+    // Closest hits of up to kPacket parallel rays from[i] + t·dir, t in (0, tmax[i]), at once (one
+    // Embree packet, marked coherent). Bit i of the result: ray i hit triangle tri[i] at t[i].
+    uint32_t intersectParallel(const Vec3* from, int count, const Vec3& dir, const float* tmax, float* t,
+                               uint32_t* tri) const;
     const Scene& scene() const { return scene_; }
     // The same triangles in a TriangleBvh, for queries by cylinder; built on first use.
     const TriangleBvh& triangleBvh() const;
