@@ -613,13 +613,156 @@ def caustic_pool(outdir):
     return g
 
 
+# A furnished room lit through a window and by a ceiling lamp, with the fine
+# geometry real interiors have and boxes lack: skirting boards and a crown
+# moulding 2-6 cm deep, picture frames of 3 cm bars, a table and chairs on
+# 3-5 cm legs, chair backs of 3 cm slats, a banister of 3 cm balusters 12 cm
+# apart, shelves of 2 cm boards. At the default grid (192 voxels over the
+# room's 5 m) a voxel is 2.7 cm: these parts are one to three voxels wide.
+IN_X, IN_H, IN_Z = 2.0, 2.6, 2.5          # room: x, z in [-IN_X, IN_X] x [-IN_Z, IN_Z]
+WIN_Z0, WIN_Z1, WIN_Y0, WIN_Y1 = -1.6, -0.4, 0.9, 2.1  # window in the left wall
+WIN_DEPTH = 0.2                            # the wall's thickness at the window
+
+
+def interior(outdir):
+    g = GltfBuilder("interior")
+    wall = g.material("wall", (0.7, 0.68, 0.62))
+    ceiling = g.material("ceiling", (0.8, 0.8, 0.8))
+    floor = g.material("floor", (0.45, 0.3, 0.2))
+    trim = g.material("trim", (0.82, 0.8, 0.76))
+    wood = g.material("wood", (0.35, 0.22, 0.12))
+    gilt = g.material("frame", (0.6, 0.48, 0.28))
+    canvas = [g.material("canvas_blue", (0.15, 0.3, 0.55)),
+              g.material("canvas_red", (0.6, 0.15, 0.1))]
+    sky = g.material("sky", (0.0, 0.0, 0.0), emissive=(0.75, 0.85, 1.0),
+                     strength=12.0)
+    lamp = g.material("lamp", (0.0, 0.0, 0.0), emissive=LIGHT_RGB,
+                      strength=30.0)
+    cube = unit_cube()
+    meshes = {}
+
+    def box(name, material, lo, hi):
+        """An axis-aligned box from corner lo to corner hi."""
+        if material not in meshes:
+            meshes[material] = g.mesh("cube_%d" % material, cube, material)
+        g.node(name, mesh=meshes[material],
+               t=tuple((a + b) / 2 for a, b in zip(lo, hi)),
+               s=tuple(b - a for a, b in zip(lo, hi)))
+
+    def quad(name, geom, material):
+        g.node(name, mesh=g.mesh(name, geom, material))
+
+    # The shell, normals into the room; the left wall less the window, whose
+    # reveal is a short tunnel ending in the sky.
+    quad("floor", rect((0, 0, 0), mul(X, IN_X), mul(Z, IN_Z), Y), floor)
+    quad("ceiling", rect((0, IN_H, 0), mul(X, IN_X), mul(Z, IN_Z),
+                         mul(Y, -1)), ceiling)
+    quad("back_wall", rect((0, IN_H / 2, -IN_Z), mul(X, IN_X),
+                           mul(Y, IN_H / 2), Z), wall)
+    quad("front_wall", rect((0, IN_H / 2, IN_Z), mul(X, IN_X),
+                            mul(Y, IN_H / 2), mul(Z, -1)), wall)
+    quad("right_wall", rect((IN_X, IN_H / 2, 0), mul(Y, IN_H / 2),
+                            mul(Z, IN_Z), mul(X, -1)), wall)
+
+    def left_piece(z0, z1, y0, y1):
+        return rect((-IN_X, (y0 + y1) / 2, (z0 + z1) / 2),
+                    mul(Y, (y1 - y0) / 2), mul(Z, (z1 - z0) / 2), X)
+    quad("left_wall", merge(
+        left_piece(-IN_Z, WIN_Z0, 0, IN_H), left_piece(WIN_Z1, IN_Z, 0, IN_H),
+        left_piece(WIN_Z0, WIN_Z1, 0, WIN_Y0),
+        left_piece(WIN_Z0, WIN_Z1, WIN_Y1, IN_H)), wall)
+    xr = -IN_X - WIN_DEPTH / 2
+    hz, hy, hd = (WIN_Z1 - WIN_Z0) / 2, (WIN_Y1 - WIN_Y0) / 2, WIN_DEPTH / 2
+    zc, yc = (WIN_Z0 + WIN_Z1) / 2, (WIN_Y0 + WIN_Y1) / 2
+    quad("window_reveal", merge(
+        rect((xr, WIN_Y0, zc), mul(X, hd), mul(Z, hz), Y),
+        rect((xr, WIN_Y1, zc), mul(X, hd), mul(Z, hz), mul(Y, -1)),
+        rect((xr, yc, WIN_Z0), mul(X, hd), mul(Y, hy), Z),
+        rect((xr, yc, WIN_Z1), mul(X, hd), mul(Y, hy), mul(Z, -1))), trim)
+    quad("sky", rect((-IN_X - WIN_DEPTH, yc, zc), mul(Y, hy), mul(Z, hz), X),
+         sky)
+    # Window bars: a mullion and a transom, 4 cm.
+    box("mullion", trim, (-IN_X - 0.12, WIN_Y0, zc - 0.02),
+        (-IN_X - 0.08, WIN_Y1, zc + 0.02))
+    box("transom", trim, (-IN_X - 0.12, yc - 0.02, WIN_Z0),
+        (-IN_X - 0.08, yc + 0.02, WIN_Z1))
+    quad("lamp", rect((0.3, IN_H - 0.01, 0.2), mul(X, 0.2), mul(Z, 0.2),
+                      mul(Y, -1)), lamp)
+
+    # Mouldings: skirting boards 2 cm deep, a crown moulding 6 cm.
+    for name, lo, hi in (
+            ("skirting_back", (-IN_X, 0, -IN_Z), (IN_X, 0.12, -IN_Z + 0.02)),
+            ("skirting_right", (IN_X - 0.02, 0, -IN_Z), (IN_X, 0.12, IN_Z)),
+            ("skirting_left", (-IN_X, 0, -IN_Z), (-IN_X + 0.02, 0.12, IN_Z)),
+            ("crown_back", (-IN_X, IN_H - 0.08, -IN_Z),
+             (IN_X, IN_H, -IN_Z + 0.06)),
+            ("crown_right", (IN_X - 0.06, IN_H - 0.08, -IN_Z),
+             (IN_X, IN_H, IN_Z))):
+        box(name, trim, lo, hi)
+    # Two framed pictures on the back wall: 3 cm bars standing 3 cm off it.
+    for k, (x0, y0, w, h) in enumerate(((-1.3, 1.2, 0.8, 0.6),
+                                        (0.4, 1.1, 0.6, 0.8))):
+        z0, z1 = -IN_Z, -IN_Z + 0.03
+        quad("canvas_%d" % k, rect((x0 + w / 2, y0 + h / 2, z0 + 0.01),
+                                   mul(X, w / 2), mul(Y, h / 2), Z), canvas[k])
+        for side, lo, hi in (("bottom", (x0, y0, z0), (x0 + w, y0 + 0.03, z1)),
+                             ("top", (x0, y0 + h - 0.03, z0),
+                              (x0 + w, y0 + h, z1)),
+                             ("left", (x0, y0, z0), (x0 + 0.03, y0 + h, z1)),
+                             ("right", (x0 + w - 0.03, y0, z0),
+                              (x0 + w, y0 + h, z1))):
+            box("frame_%d_%s" % (k, side), gilt, lo, hi)
+    # A table on 5 cm legs, two chairs on 3 cm legs with slatted backs.
+    tx, tz = -0.2, -0.6
+    box("table_top", wood, (tx - 0.6, 0.72, tz - 0.35), (tx + 0.6, 0.76, tz + 0.35))
+    for i, (dx, dz) in enumerate(((-0.55, -0.3), (0.5, -0.3), (-0.55, 0.25),
+                                  (0.5, 0.25))):
+        box("table_leg_%d" % i, wood, (tx + dx, 0, tz + dz),
+            (tx + dx + 0.05, 0.72, tz + dz + 0.05))
+    for c, (cx, cz, facing) in enumerate(((tx - 0.3, tz + 0.6, 1.0),
+                                          (tx + 0.35, tz - 0.62, -1.0))):
+        box("chair_%d_seat" % c, wood, (cx - 0.21, 0.43, cz - 0.21),
+            (cx + 0.21, 0.46, cz + 0.21))
+        for i, (dx, dz) in enumerate(((-0.2, -0.2), (0.17, -0.2),
+                                      (-0.2, 0.17), (0.17, 0.17))):
+            box("chair_%d_leg_%d" % (c, i), wood, (cx + dx, 0, cz + dz),
+                (cx + dx + 0.03, 0.43, cz + dz + 0.03))
+        bz = cz + facing * 0.19
+        box("chair_%d_rail" % c, wood, (cx - 0.21, 0.88, bz - 0.015),
+            (cx + 0.21, 0.92, bz + 0.015))
+        for i in range(4):
+            x = cx - 0.165 + i * 0.11
+            box("chair_%d_slat_%d" % (c, i), wood, (x, 0.46, bz - 0.015),
+                (x + 0.03, 0.88, bz + 0.015))
+    # A banister along the right of the room: 3 cm balusters 12 cm apart
+    # under a 5 cm rail.
+    bx = 1.2
+    box("banister_rail", wood, (bx - 0.025, 0.9, -1.8), (bx + 0.025, 0.95, 1.0))
+    box("banister_base", wood, (bx - 0.04, 0, -1.8), (bx + 0.04, 0.06, 1.0))
+    for i in range(24):
+        z = -1.76 + i * 0.12
+        box("baluster_%d" % i, trim, (bx - 0.015, 0.06, z),
+            (bx + 0.015, 0.9, z + 0.03))
+    # Shelves of 2 cm boards against the right wall, behind the banister.
+    for i in range(5):
+        y = 0.1 + i * 0.45
+        box("shelf_%d" % i, wood, (IN_X - 0.3, y, -2.3), (IN_X - 0.02, y + 0.02, -1.3))
+    for side, z in (("a", -2.32), ("b", -1.3)):
+        box("shelf_side_" + side, wood, (IN_X - 0.3, 0.1, z),
+            (IN_X - 0.02, 1.92, z + 0.02))
+    g.camera("camera", eye=(0.9, 1.55, 2.3), target=(-0.5, 0.9, -1.2),
+             yfov=1.05, aspect=1.333)
+    g.write_gltf(os.path.join(outdir, "interior.gltf"))
+    return g
+
+
 def main(argv):
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
     os.makedirs(outdir, exist_ok=True)
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
-                  lambda d: two_rooms(d, gap=True), caustic_pool):
+                  lambda d: two_rooms(d, gap=True), caustic_pool, interior):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n
