@@ -105,10 +105,12 @@ Arguments parseRender(int argc, char** argv) {
     Command cmd("raysplat render SCENE -o OUT.exr [options]",
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): GPU voxelization (EGL) once, then 8 passes of eye pass, occlusion tree,\n"
-                "photons and splatting, averaged, with kernels shrinking from pass to pass. Direct light is sampled\n"
-                "at every eye sample, as a path tracer does; '--direct photons --passes 1' is the paper's own\n"
-                "estimator (4 samples a pixel, 100000 photons split 20/50/30, grid 192). Outputs are written\n"
+                "(Herzog & Seidel 2007): 8 passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
+                "with kernels shrinking from pass to pass. Direct light is sampled at every eye sample, as a path\n"
+                "tracer does, and a photon reaches the eye samples that see its origin, its kernel's light kept whole\n"
+                "past edges and corners. '--direct photons --passes 1' is the paper's own estimator (4 samples a\n"
+                "pixel, 100000 photons split 20/50/30, GPU voxelization into an occlusion mask of grid 192, no\n"
+                "coverage correction). Outputs are written\n"
                 "atomically: a failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or\n"
                 "with fewer passes than ranks each pass's photons, are divided between the ranks: the same image.");
     cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
@@ -127,6 +129,14 @@ Arguments parseRender(int argc, char** argv) {
              }});
     cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
              [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
+    cmd.add({"--visibility", "NAME",
+             "which eye samples a photon reaches: rays (each sample's ray to the photon's origin, the kernel's coverage "
+             "measured), mask (the paper's occlusion mask, then those rays); default auto: mask with --direct photons, else rays",
+             [&](const std::string& v) { cfg.visibility = parseVisibility(v); }});
+    cmd.add({"--coverage-probes", "N",
+             "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
+                 std::to_string(RenderConfig{}.coverageProbes) + ", 0..16; 0: no correction)",
+             [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
     cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 8)",
              [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
     cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",

@@ -32,6 +32,22 @@ DirectMethod parseDirectMethod(const std::string& name) {
     throw Error(ErrorKind::Config, "`direct` " + name + ": unknown method (sample, photons)");
 }
 
+const char* visibilityName(Visibility v) {
+    switch (v) {
+        case Visibility::Auto: return "auto";
+        case Visibility::Mask: return "mask";
+        case Visibility::Rays: return "rays";
+    }
+    return "?";
+}
+
+Visibility parseVisibility(const std::string& name) {
+    if (name == "auto") return Visibility::Auto;
+    if (name == "mask") return Visibility::Mask;
+    if (name == "rays") return Visibility::Rays;
+    throw Error(ErrorKind::Config, "`visibility` " + name + ": unknown visibility (auto, mask, rays)");
+}
+
 ClassTriple RenderConfig::photonSplit() const {
     ClassTriple out = split;
     if (!splitSet && directBySampling()) out[0] = 0.f;
@@ -67,6 +83,7 @@ void RenderConfig::validate() const {
     const ClassTriple used = photonSplit();
     if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "`split` needs a positive share for some class");
     requireRange("light-samples", lightSamples, 1, 4096);
+    requireRange("coverage-probes", coverageProbes, 0, CoverageSettings::kMaxProbes);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
     requireRange("max-depth", maxDepth, 1, 1024);
@@ -134,6 +151,10 @@ ImageAttributes RenderConfig::attributes() const {
         a["split"] = tripleText(used);
         a["kernelPhotons"] = tripleText(kernelPhotons);
         a["radiusVoxels"] = tripleText(minRadius) + "/" + tripleText(maxRadius);
+        if (method == Method::Splat) {
+            a["visibility"] = visibilityName(visibilityUsed());
+            if (visibilityUsed() == Visibility::Rays) a["coverageProbes"] = std::to_string(coverageProbes);
+        }
     }
     return a;
 }

@@ -9,6 +9,7 @@
 #include "grid/grid_stage.h"
 #include "output/image_io.h"
 #include "path/path.h"
+#include "splat/coverage.h"
 #include "splat/eye.h"
 #include "splat/photons.h"
 
@@ -26,6 +27,15 @@ Method parseMethod(const std::string& name);  // throws Error(Config)
 enum class DirectMethod { Sample, Photons };
 const char* directMethodName(DirectMethod d);
 DirectMethod parseDirectMethod(const std::string& name);  // throws Error(Config)
+
+// How the splat decides which eye samples a photon ray's light reaches (docs/design.md §8):
+// mask (the paper's occlusion mask over the voxel grid, then the receiver rules) or rays (the
+// receiver rules alone: each sample's own ray to the photon's origin, and the kernel's lost
+// share given back by its measured coverage). auto: mask for the paper's estimator (direct
+// photons), rays otherwise.
+enum class Visibility { Auto, Mask, Rays };
+const char* visibilityName(Visibility v);
+Visibility parseVisibility(const std::string& name);  // throws Error(Config)
 
 // A per-class triple as "a,b,c", each number in its shortest form (%g): the EXR header's
 // settings and --help's defaults.
@@ -74,6 +84,10 @@ struct RenderConfig {
     ClassTriple kernelPhotons = PhotonSettings{}.k;
     ClassTriple minRadius = PhotonSettings{}.minRadius;
     ClassTriple maxRadius = PhotonSettings{}.maxRadius;
+    Visibility visibility = Visibility::Auto;
+    // Probes a photon for its kernel's coverage with `visibility` rays (0: none, the kernels'
+    // light past edges and corners lost). Defaults: CoverageSettings.
+    int coverageProbes = CoverageSettings{}.probes;
 
     // Occlusion grid (docs/design.md §5–6).
     int grid = GridSettings{}.resolution;             // voxels along the scene's longest axis
@@ -87,6 +101,15 @@ struct RenderConfig {
     bool directBySampling() const { return direct == DirectMethod::Sample; }
     ClassTriple photonSplit() const;
     bool splats() const { return method != Method::Path; }
+    // The visibility a splat render uses: `visibility` with Auto resolved.
+    Visibility visibilityUsed() const {
+        return visibility != Visibility::Auto ? visibility : directBySampling() ? Visibility::Rays : Visibility::Mask;
+    }
+    // Whether the render needs the voxel grid's occlusion (the mask), not only its geometry.
+    bool needsMask() const { return method == Method::Splat && visibilityUsed() == Visibility::Mask; }
+    // Whether the receiver rules alone decide visibility (kernels reaching to the scene's bounds,
+    // their coverage measured).
+    bool visibilityByRays() const { return method == Method::Splat && visibilityUsed() == Visibility::Rays; }
     void validate() const;
     // The grid settings only (validate() includes them): for commands without an image.
     void validateGrid() const;

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "scene/accel.h"
+#include "splat/coverage.h"
 #include "splat/eye.h"
 #include "grid/grid_stage.h"
 #include "splat/kdtree.h"
@@ -88,7 +89,15 @@ PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
     ps.voxelSize = voxelSize;
     ps.maxDepth = cfg.maxDepth;
     ps.seed = cfg.seed;
+    ps.reachToBounds = cfg.visibilityByRays();
     return ps;
+}
+
+CoverageSettings coverageSettings(const RenderConfig& cfg) {
+    CoverageSettings cs;
+    cs.probes = cfg.coverageProbes;
+    cs.seed = cfg.seed;
+    return cs;
 }
 
 PathSettings pathSettings(const RenderContext& c) {
@@ -182,18 +191,26 @@ Film renderPath(const RenderContext& c) {
 // Figures summed over a render's passes (the last pass's sizes are reported as they come).
 struct SplatTotals {
     SplatStats splat;
+    CoverageStats coverage;
     int64_t photonsStored = 0;
     double photonMb = 0.0;
 };
 
 Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     Stats& stats = c.stats;
-    // The occlusion grid, once (docs/design.md §5–6). Without visibility the tree indexes the eye
-    // samples over an empty grid: nothing occludes.
-    OcclusionGrid grid = buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, stats, outputs);
-    if (c.cfg.method == Method::SplatNoVis) grid = OcclusionGrid(grid.geometry);
+    // The occlusion grid, once (docs/design.md §5–6), where the mask needs it or its file was asked
+    // for. Otherwise the tree indexes the eye samples over an empty grid of the same geometry:
+    // nothing occludes in it, and the receiver rules alone decide (--visibility rays), or nothing
+    // does (splat-novis).
+    const bool mask = c.cfg.needsMask();
+    OcclusionGrid grid = mask || !c.cfg.vdb.empty() || !c.cfg.cacheDir.empty()
+                             ? buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, stats, outputs)
+                             : OcclusionGrid(gridForBounds(c.scene.bounds, c.cfg.grid));
+    if (!mask) grid = OcclusionGrid(grid.geometry);
     EyePassSettings es = eyePassSettings(c);
     PhotonSettings ps = photonSettings(c.cfg, grid.geometry.voxelSize);
+    CoverageSettings cs = coverageSettings(c.cfg);
+    const bool coverage = c.cfg.visibilityByRays() && cs.probes > 0;
     SplatSettings splat = splatSettings(c.cfg);
     SplatTotals totals;
 
@@ -222,6 +239,14 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         ps.radiusScale = passRadiusScale(pass, c.cfg.alpha);
         PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, ps, c.pool, c.reporter);
         stats.addTime("photons", t.seconds());
+        // The kernels' coverage, measured as the receiver rules will see it (docs/design.md §8).
+        if (coverage) {
+            t = Timer();
+            cs.pass = uint64_t(pass);
+            normalizeKernelCoverage(c.accel, photons, cs, c.pool, c.reporter, &totals.coverage);
+            stats.addTime("coverage", t.seconds());
+            totals.coverage.report(stats);
+        }
         photons.report(stats);
         totals.photonsStored += int64_t(photons.rays.size());
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);

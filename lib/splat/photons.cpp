@@ -38,6 +38,14 @@ const char* photonClassName(int c) {
 
 namespace {
 
+// How far o + t·d runs before it leaves the box (0 when it starts outside).
+float exitDistance(const Bounds3& b, const Vec3& o, const Vec3& d) {
+    float t = kInf;
+    for (int a = 0; a < 3; ++a)
+        if (d[a] != 0.f) t = std::min(t, ((d[a] > 0.f ? b.hi[a] : b.lo[a]) - o[a]) / d[a]);
+    return std::max(t, 0.f);
+}
+
 constexpr int64_t kBlockPaths = 8192;  // paths per merge block (fixed: determinism)
 constexpr int64_t kProbePaths = 32768;  // the first block, whose yield sets the quotas
 constexpr int kDimsPerBounce = 4;      // lobe, direction (2), Russian roulette
@@ -226,6 +234,8 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
         r.flux = Vec3(DVec3(r.flux) / n);
         float h = std::sqrt(st.k[r.cls] / (kPi * float(n) * std::max(r.density, 1e-30f)));
         r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize) * st.radiusScale;
+        if (st.reachToBounds && r.radius > 0.f)
+            r.reach = std::max(r.reach, (exitDistance(scene.bounds, r.origin, r.dir) - r.length) / r.radius + 1.f);  // a radius past the walls on the bounds
     }
     return map;
 }

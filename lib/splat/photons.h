@@ -32,6 +32,7 @@ struct PhotonRay {
     uint32_t originNormal;  // encodeUnit of the tangent plane's normal at x(i−1) (side of dir); 0: none
     float density;      // p⊥ of the photon at x(i) per path (1/m²), for the radius
     float reach;        // how far past x(i) the kernel reaches, in radii: tan θ at x(i), clamped to [1, 16]
+                        // (with PhotonSettings::reachToBounds, at least to where the ray leaves the scene)
     uint8_t cls;        // PhotonClass
     uint8_t pad[3] = {0, 0, 0};  // no indeterminate bytes: photon arrays compare with memcmp
 
@@ -69,6 +70,12 @@ struct PhotonSettings {
     uint64_t firstPath = 0;                  // sequence offset (progressive passes)
     static constexpr int kPathsPerPassBits = 40;  // pass p traces paths from p · 2^40: ranges never overlap
     float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
+    // The kernel reaches on past x(i) to the scene's bounds: with visibility by rays alone
+    // (--visibility rays) a sample beyond x(i) receives only where it sees x(i−1), past the
+    // edge of what the photon hit, so a kernel that half-misses a convex edge or a thin part
+    // loses nothing there. (Cut at reachOf, the staircase interior's indirect light lost 4 %
+    // more; on the furnished interior rel. MSE was 3.3e-3 at 8 radii, 2.1e-3 to the bounds.)
+    bool reachToBounds = false;
     int64_t maxPaths = 0;                    // 0: 50 × photons
 };
 
