@@ -137,7 +137,13 @@ Arguments parseRender(int argc, char** argv) {
              "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
                  std::to_string(RenderConfig{}.coverageProbes) + ", 0..16; 0: no correction)",
              [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
-    cmd.add({"--light-samples", "N", "light samples per eye sample for --direct sample (default 8)",
+    cmd.add({"--direct-spp", "N",
+             "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
+             "and normal, apart from the photons' receivers (default " + std::to_string(RenderConfig{}.directSpp) +
+                 "; 0: at the receivers)",
+             [&](const std::string& v) { cfg.directSpp = parseNumber<int>("--direct-spp", v); }});
+    cmd.add({"--light-samples", "N", "light samples per direct film sample (or eye sample, with --direct-spp 0) for --direct sample (default " +
+                 std::to_string(RenderConfig{}.lightSamples) + ")",
              [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
     cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",
              [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});

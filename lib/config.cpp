@@ -83,6 +83,7 @@ void RenderConfig::validate() const {
     const ClassTriple used = photonSplit();
     if (!(used[0] + used[1] + used[2] > 0.f)) throw Error(ErrorKind::Config, "`split` needs a positive share for some class");
     requireRange("light-samples", lightSamples, 1, 4096);
+    requireRange("direct-spp", directSpp, 0, 1 << 16);
     requireRange("coverage-probes", coverageProbes, 0, CoverageSettings::kMaxProbes);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
@@ -146,6 +147,7 @@ ImageAttributes RenderConfig::attributes() const {
         const ClassTriple used = photonSplit();
         a["direct"] = directMethodName(direct);
         if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
+        if (directBySampling()) a["directSpp"] = std::to_string(directSpp);
         a["alpha"] = std::to_string(alpha);
         a["photons"] = std::to_string(photons);
         a["split"] = tripleText(used);

@@ -70,11 +70,15 @@ struct RenderConfig {
     // Photons (docs/design.md §7): total M, the split direct/indirect/caustic, the photons wanted
     // under a kernel (k) and the radius clamps in voxels, per class.
     DirectMethod direct = DirectMethod::Sample;
-    // Light samples (and as many BSDF samples) per eye sample for direct light by sampling;
-    // punctual lights need one. Measured on the Cornell box at 128 px: direct rel. MSE 0.0093
-    // with 1, 0.0029 with 2, 0.00084 with 4, 0.00044 with 8, at the same total time; at 500 px
-    // 8 samples cost 1.05 s of eye pass against 0.25 s for 1 (a pass takes about 17 s).
-    int lightSamples = 8;
+    // Direct light by sampling (docs/design.md §4): a direct film of `directSpp` camera samples a
+    // pixel and pass, apart from the photons' receivers, each with `lightSamples` light samples
+    // (and as many BSDF samples) stratified across the pixel's samples. At 250 px, 8 passes,
+    // direct-layer rel. MSE and eye-pass seconds: Cornell box 2.6e-5 in 2.33 s with the light
+    // sampled at the 4 receivers, 8 samples each; 1.7e-5 in 2.10 s with a film of 16 × 1
+    // (16 × 2: 1.0e-5 in 3.24 s); under direct_light's point light 5.1e-5 against 5.9e-6.
+    // directSpp 0: at the receivers, as the paper's eye samples (emission at 4 samples a pixel).
+    int lightSamples = 1;
+    int directSpp = 16;
     // Defaults and the measurements behind them: PhotonSettings.
     int64_t photons = PhotonSettings{}.photons;
     // The split as given; photonSplit() is what the render uses: unless set, direct light by

@@ -75,6 +75,7 @@ EyePassSettings eyePassSettings(const RenderContext& c) {
     es.spp = c.cfg.samplesPerPixel();
     es.maxSpecularDepth = c.cfg.maxDepth;
     es.directSamples = c.cfg.directBySampling() ? c.cfg.lightSamples : 0;
+    es.directSpp = c.cfg.directBySampling() ? c.cfg.directSpp : 0;
     es.seed = c.cfg.seed;
     return es;
 }
@@ -220,6 +221,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         const int pass = share.pass;
         Timer t;
         es.firstSample = pass * es.spp;
+        es.firstDirectSample = pass * es.directSpp;
         EyePass eye = traceEyePass(c.scene, c.accel, &c.lights, c.camera, es, c.pool, c.reporter);
         stats.addTime("eye", t.seconds());
         stats.setCount("eye_samples", double(eye.samples.size()));

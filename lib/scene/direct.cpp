@@ -26,17 +26,19 @@ float emitterHitWeight(const LightSampler& lights, float bsdfPdf, const Vec3& fr
     return powerHeuristic(bsdfPdf, lights.pdfLi(from, hit.tri, hit.p));
 }
 
-Vec3 estimateDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
-                    const Vec3& wo, int n, uint64_t scramble, Sampler& sampler) {
+namespace {
+
+// n light samples, (uChoice, u) = lightNumbers(k), and n BSDF samples from `sampler`, MIS-combined.
+template <class LightNumbers>
+Vec3 directSamples(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
+                   const Vec3& wo, int n, Sampler& sampler, LightNumbers&& lightNumbers) {
     const Scene& scene = accel.scene();
     Vec3 sum(0.f);
-    const float jitter = sampler.get1D();
     for (int k = 0; k < n; ++k) {
-        // Light sampling: stratified in the light choice and over the light's surface.
-        Vec2 u = sobol2D(uint32_t(k), scramble);
-        float uChoice = (float(k) + jitter) / float(n);
+        float uChoice;
+        Vec2 u;
+        lightNumbers(k, uChoice, u);
         sum += sampleLightDirect(accel, lights, sp, bsdf, wo, std::min(uChoice, 0x1.fffffep-1f), u);
-
         // BSDF sampling: emitted light met first by the sampled ray.
         float uLobe = sampler.get1D();
         BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
@@ -49,6 +51,32 @@ Vec3 estimateDirect(const RayAccel& accel, const LightSampler& lights, const Sur
         sum += bs.weight * m.emission * emitterHitWeight(lights, bs.pdf, sp.p, hit);
     }
     return sum / float(n);
+}
+
+}  // namespace
+
+Vec3 estimateDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
+                    const Vec3& wo, int n, uint64_t scramble, Sampler& sampler) {
+    const float jitter = sampler.get1D();
+    // Light sampling: stratified in the light choice and over the light's surface.
+    return directSamples(accel, lights, sp, bsdf, wo, n, sampler, [&](int k, float& uChoice, Vec2& u) {
+        u = sobol2D(uint32_t(k), scramble);
+        uChoice = (float(k) + jitter) / float(n);
+    });
+}
+
+Vec3 estimateDirectAcrossSamples(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp,
+                                 const Bsdf& bsdf, const Vec3& wo, int n, uint64_t scramble, uint32_t index,
+                                 Sampler& sampler) {
+    const uint32_t shuffle = uint32_t(scramble);
+    const uint64_t pointScramble = mix64(scramble);
+    return directSamples(accel, lights, sp, bsdf, wo, n, sampler, [&](int k, float& uChoice, Vec2& u) {
+        // owenScramble of an index permutes it within aligned power-of-two blocks: any 2^m
+        // consecutive samples still take 2^m consecutive points, in another order.
+        const Vec2 p = sobol2D(owenScramble(index * uint32_t(n) + uint32_t(k), shuffle), pointScramble);
+        uChoice = p.x;
+        u = Vec2(lights.withinChoice(p.x), p.y);
+    });
 }
 
 }  // namespace rs

@@ -29,4 +29,13 @@ float emitterHitWeight(const LightSampler& lights, float bsdfPdf, const Vec3& fr
 Vec3 estimateDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
                     const Vec3& wo, int n, uint64_t scramble, class Sampler& sampler);
 
+// estimateDirect for one of a pixel's many samples, its n light samples stratified across the
+// pixel's samples: light sample k of the pixel's sample `index` is point index·n + k of a
+// pixel-wide 2D Sobol sequence scrambled by `scramble` (walked in a shuffled order, apart from
+// the camera's), whose first number both chooses the light and, rescaled, places the point on
+// it (LightSampler::withinChoice): each light gets a stratified share of the points.
+Vec3 estimateDirectAcrossSamples(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp,
+                                 const Bsdf& bsdf, const Vec3& wo, int n, uint64_t scramble, uint32_t index,
+                                 class Sampler& sampler);
+
 }  // namespace rs

@@ -41,6 +41,13 @@ size_t LightSampler::choose(float u, float& prob) const {
     return i;
 }
 
+float LightSampler::withinChoice(float u) const {
+    float prob;
+    const size_t i = choose(u, prob);
+    const float lo = i ? cdf_[i - 1] : 0.f;
+    return prob > 0.f ? std::clamp((u - lo) / prob, 0.f, 0x1.fffffep-1f) : 0.f;
+}
+
 LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
     LightSample s;
     if (empty()) return s;

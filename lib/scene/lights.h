@@ -33,6 +33,10 @@ public:
     bool empty() const { return cdf_.empty(); }
     // Next-event estimation towards one light chosen by power.
     LightSample sampleLi(const Vec3& p, float uChoice, Vec2 u) const;
+    // Where u lies inside the interval of the light it picks, in [0, 1): one number both chooses
+    // the light and places the point on it, so that stratified numbers stay stratified on
+    // each light.
+    float withinChoice(float u) const;
     // Solid-angle pdf that sampleLi from `p` picks point `pl` on emissive triangle `tri`.
     float pdfLi(const Vec3& p, uint32_t tri, const Vec3& pl) const;
     // A photon leaving a light: 1 number picks the light, 2 the position, 2 the direction.

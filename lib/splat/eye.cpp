@@ -145,16 +145,52 @@ bool reflectsNothing(const Material& m) {
     return m.kind == MaterialKind::Lambert && m.baseColorTexture < 0 && isBlack(m.baseColor);
 }
 
+// Follows a camera ray of weight `weight` through specular surfaces to the first non-specular
+// one, adding the emitters met on the way (front faces) to `emission`; there calls
+// atSurface(sp, bsdf, wo, weight). Returns without a call when the ray leaves the scene or the
+// chain ends.
+template <class AtSurface>
+void followCameraRay(const Scene& scene, const RayAccel& accel, Vec3 o, Vec3 d, Vec3 weight, int maxDepth,
+                     Sampler& sampler, Vec3& emission, AtSurface&& atSurface) {
+    for (int depth = 0; depth <= maxDepth; ++depth) {
+        SurfacePoint sp;
+        float t;
+        if (!accel.intersect(o, d, kInf, sp, t)) return;
+        const Material& m = scene.materials[sp.material];
+        if (m.isEmissive() && sp.frontFace) emission += weight * m.emission;
+        const Vec3 wo = -d;
+        Bsdf bsdf(scene, sp, wo);
+        if (!bsdf.isDelta()) {
+            atSurface(sp, bsdf, wo, weight);
+            return;
+        }
+        const float uLobe = sampler.get1D();
+        BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
+        if (bs.pdf <= 0.f || isBlack(bs.weight)) return;
+        weight *= bs.weight;
+        o = offsetRayOrigin(sp, bs.wi);
+        d = bs.wi;
+    }
+}
+
 }  // namespace
 
 EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
                      const EyePassSettings& st, ThreadPool& pool, Reporter& reporter) {
     const bool direct = st.directSamples > 0 && lights && !lights->empty();
+    // With a direct film the receivers add nothing to the film: its own samples do.
+    const bool film = st.directSpp > 0;
     EyePass out;
     out.film = Film(st.width, st.height);
     CameraRays rays(camera, st.width, st.height);
     const float invSpp = 1.f / float(st.spp);
     std::vector<EyeSamples> rows(st.height);
+
+    // Direct light at a non-specular point seen through a camera sample (pixel, index) of the
+    // given stage's sequence, weighted.
+    auto addDirect = [&](uint32_t pixel, const Vec3& weight, const Vec3& l) {
+        if (isFinite(l)) out.film.layers[kDirect][pixel] += weight * l;
+    };
 
     reporter.begin("eye pass", st.height, "rows");
     pool.parallelFor(st.height, 4, [&](int64_t y0, int64_t y1, int) {
@@ -162,53 +198,63 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
             EyeSamples& row = rows[y];
             row.reserve(size_t(st.width) * st.spp);
             for (int x = 0; x < st.width; ++x) {
-                uint32_t pixel = uint32_t(y * st.width + x);
-                uint64_t scramble = hashKey(st.seed, Stage::Camera, pixel);
+                const uint32_t pixel = uint32_t(y * st.width + x);
+                Vec3& emission = out.film.layers[kEmission][pixel];
+                Vec3 noEmission(0.f);
+                // The receivers: S camera samples, an eye sample each where the ray's chain ends.
+                const uint64_t scramble = hashKey(st.seed, Stage::Camera, pixel);
                 for (int s = 0; s < st.spp; ++s) {
                     const uint32_t index = uint32_t(st.firstSample + s);
-                    Vec2 jitter = sobol2D(index, scramble);
+                    const Vec2 jitter = sobol2D(index, scramble);
                     Sampler sampler(st.seed, Stage::Eye, pixelSampleKey(pixel, index));
-                    Vec3 o = rays.origin(), d = rays.direction(Vec2(float(x), float(y)) + jitter);
-                    Vec3 weight(invSpp);
-
-                    // Follow the specular chain to the first non-specular surface.
-                    for (int depth = 0; depth <= st.maxSpecularDepth; ++depth) {
-                        SurfacePoint sp;
-                        float t;
-                        if (!accel.intersect(o, d, kInf, sp, t)) break;
-                        const Material& m = scene.materials[sp.material];
-                        if (m.isEmissive() && sp.frontFace) out.film.layers[kEmission][pixel] += weight * m.emission;
-                        Vec3 wo = -d;
-                        Bsdf bsdf(scene, sp, wo);
-                        if (!bsdf.isDelta()) {
+                    followCameraRay(scene, accel, rays.origin(), rays.direction(Vec2(float(x), float(y)) + jitter), Vec3(invSpp),
+                                    st.maxSpecularDepth, sampler, film ? noEmission : emission,
+                                    [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
+                        if (!film) {
                             out.film.albedo[pixel] += invSpp * bsdf.albedo();
                             out.film.normal[pixel] += invSpp * bsdf.shadingNormal();
-                            if (reflectsNothing(m)) break;
-                            const Vec3 ng = glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng;
-                            const Vec3 diffuse = weight * bsdf.diffuseReflectance();
-                            if (bsdf.hasGlossyLobe()) {
-                                GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight),
-                                                encodeUnit(wo), bsdf.ggxAlpha()};
-                                row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
-                            } else {
-                                row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
-                            }
-                            if (direct) {
-                                const uint64_t key = pixelSampleKey(pixel, index);
-                                Sampler ds(st.seed, Stage::Direct, key);
-                                Vec3 l = estimateDirect(accel, *lights, sp, bsdf, wo, st.directSamples,
-                                                        hashKey(st.seed, Stage::Direct, key, 1), ds);
-                                if (isFinite(l)) out.film.layers[kDirect][pixel] += weight * l;
-                            }
-                            break;
                         }
-                        float uLobe = sampler.get1D();
-                        BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
-                        if (bs.pdf <= 0.f || isBlack(bs.weight)) break;
-                        weight *= bs.weight;
-                        o = offsetRayOrigin(sp, bs.wi);
-                        d = bs.wi;
-                    }
+                        if (reflectsNothing(scene.materials[sp.material])) return;
+                        const Vec3 ng = glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng;
+                        const Vec3 diffuse = weight * bsdf.diffuseReflectance();
+                        if (bsdf.hasGlossyLobe()) {
+                            GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight),
+                                            encodeUnit(wo), bsdf.ggxAlpha()};
+                            row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
+                        } else {
+                            row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
+                        }
+                        if (direct && !film) {
+                            const uint64_t key = pixelSampleKey(pixel, index);
+                            Sampler ds(st.seed, Stage::Direct, key);
+                            addDirect(pixel, weight, estimateDirect(accel, *lights, sp, bsdf, wo, st.directSamples,
+                                                                    hashKey(st.seed, Stage::Direct, key, 1), ds));
+                        }
+                    });
+                }
+                // The direct film: its own D camera samples, each with emission, direct light,
+                // albedo and normal (docs/design.md §4).
+                if (!film) continue;
+                const float invFilm = 1.f / float(st.directSpp);
+                const uint64_t filmScramble = hashKey(st.seed, Stage::DirectFilm, pixel);
+                const uint64_t lightScramble = hashKey(st.seed, Stage::DirectFilm, pixel, 1);
+                for (int s = 0; s < st.directSpp; ++s) {
+                    const uint32_t index = uint32_t(st.firstDirectSample + s);
+                    const Vec2 jitter = sobol2D(index, filmScramble);
+                    const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
+                    Sampler sampler(st.seed, Stage::DirectFilm, key);
+                    followCameraRay(scene, accel, rays.origin(), rays.direction(Vec2(float(x), float(y)) + jitter), Vec3(invFilm),
+                                    st.maxSpecularDepth, sampler, emission,
+                                    [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
+                        out.film.albedo[pixel] += invFilm * bsdf.albedo();
+                        out.film.normal[pixel] += invFilm * bsdf.shadingNormal();
+                        // The light samples of all the pixel's film samples: one sequence.
+                        if (direct && !reflectsNothing(scene.materials[sp.material])) {
+                            Sampler ds(st.seed, Stage::Direct, key);
+                            addDirect(pixel, weight, estimateDirectAcrossSamples(accel, *lights, sp, bsdf, wo, st.directSamples,
+                                                                                 lightScramble, index, ds));
+                        }
+                    });
                 }
             }
             reporter.advance(1);

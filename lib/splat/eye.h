@@ -105,14 +105,20 @@ struct EyePassSettings {
     int spp = 4;              // S: stratified camera samples a pixel (paper: 500×500×4)
     int firstSample = 0;      // this pass's samples are [firstSample, firstSample + S) of each pixel's sequence
     int maxSpecularDepth = kDefaultMaxDepth;  // longest specular chain followed
-    int directSamples = 0;    // > 0: direct light at every eye sample, by that many light samples
+    int directSamples = 0;    // > 0: direct light by that many light samples a point, at every eye sample or in the film
+    // D > 0: a direct film of D camera samples a pixel, apart from the receivers, takes the
+    // emission, the direct light, albedo and normal; this pass's are [firstDirectSample,
+    // firstDirectSample + D) of each pixel's own sequence. 0: the receivers' samples take them.
+    int directSpp = 0;
+    int firstDirectSample = 0;
     uint64_t seed = 0;
 };
 
 struct EyePass {
     EyeSamples samples;  // in pixel order, then sample order
     // Emission layer (emitters seen through specular chains), albedo, normal, and with
-    // directSamples the direct layer (light sampling at each eye sample, weighted by it).
+    // directSamples the direct layer (light sampling at each of the film's samples, or at each
+    // eye sample, weighted by it).
     Film film;
 };
 
