@@ -613,6 +613,31 @@ def caustic_pool(outdir):
     return g
 
 
+def point_shadows(outdir):
+    """Boxes casting hard shadows under a point light, on dark ground in the
+    open: little indirect light, so the image is direct light and its edges."""
+    g = GltfBuilder("point_shadows")
+    ground = g.material("ground", (0.25, 0.25, 0.25))
+    grey = g.material("box_grey", (0.5, 0.5, 0.48))
+    g.node("ground", mesh=g.mesh("ground", rect((0, 0, 0), mul(X, 4.0),
+                                                 mul(Z, 4.0), Y), ground))
+    cube = g.mesh("box", unit_cube(), grey)
+    for name, t, angle, size in (
+            ("box_tall", (-0.8, 0.6, -0.4), 25.0, (0.4, 1.2, 0.4)),
+            ("box_wide", (0.6, 0.25, 0.3), -15.0, (0.9, 0.5, 0.5)),
+            ("box_small", (-0.2, 0.15, 0.9), 40.0, (0.3, 0.3, 0.3)),
+            ("plank", (0.9, 0.9, -0.9), 10.0, (1.0, 0.04, 0.3))):
+        g.node(name, mesh=cube, t=t, r=quat_axis_angle(Y, math.radians(angle)),
+               s=size)
+    g.node("plank_post", mesh=cube, t=(0.9, 0.44, -0.9),
+           s=(0.04, 0.88, 0.04))
+    g.point_light("point_light", position=(1.2, 2.6, 1.0), intensity=30.0)
+    g.camera("camera", eye=(0.0, 3.2, 3.6), target=(0.0, 0.2, 0.0),
+             yfov=0.8, aspect=1.0)
+    g.write_gltf(os.path.join(outdir, "point_shadows.gltf"), embed=True)
+    return g
+
+
 # A furnished room lit through a window and by a ceiling lamp, with the fine
 # geometry real interiors have and boxes lack: skirting boards and a crown
 # moulding 2-6 cm deep, picture frames of 3 cm bars, a table and chairs on
@@ -762,7 +787,8 @@ def main(argv):
     os.makedirs(outdir, exist_ok=True)
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
-                  lambda d: two_rooms(d, gap=True), caustic_pool, interior):
+                  lambda d: two_rooms(d, gap=True), caustic_pool, point_shadows,
+                  interior):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n
