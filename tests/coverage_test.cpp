@@ -118,12 +118,6 @@ TEST(KernelCoverage, CountsEverySurfaceThatSeesTheOrigin) {
 
 namespace {
 
-double layerMean(const Film& f, int layer) {
-    double s = 0.0;
-    for (const Vec3& v : f.layers[layer]) s += double(v.x) + v.y + v.z;
-    return s / (3.0 * double(f.pixelCount()));
-}
-
 // The indirect layer's mean, default splat render over the path tracer's.
 double indirectRatio(const std::string& file, int width, int pathSpp) {
     Scene scene = loadScene(file, silentReporter());

@@ -158,12 +158,6 @@ RenderConfig roomConfig(int grid, const std::string& camera, Visibility visibili
     return cfg;
 }
 
-double layerMean(const Film& f, int layer) {
-    double s = 0.0;
-    for (const Vec3& v : f.layers[layer]) s += double(v.x) + v.y + v.z;
-    return s / (3.0 * double(f.pixelCount()));
-}
-
 }  // namespace
 
 // Two rooms sharing an 8 cm wall (2.5 voxels at grid 192), the light in one, the camera in

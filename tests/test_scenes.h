@@ -16,6 +16,13 @@
 
 namespace rs::test {
 
+// A film layer's mean over its pixels and channels.
+inline double layerMean(const Film& f, int layer) {
+    double s = 0.0;
+    for (const Vec3& v : f.layers[layer]) s += double(v.x) + v.y + v.z;
+    return s / (3.0 * double(f.pixelCount()));
+}
+
 // A fresh directory under the system temp directory, named after the test and removed with
 // everything in it.
 class TempDir {
