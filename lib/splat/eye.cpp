@@ -173,89 +173,108 @@ void followCameraRay(const Scene& scene, const RayAccel& accel, Vec3 o, Vec3 d, 
     }
 }
 
+// One pass's camera samples, pixel by pixel: the receivers (eye samples), and the direct film.
+class EyePassTracer {
+public:
+    EyePassTracer(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
+                  const EyePassSettings& st, Film& film)
+        : scene_(scene), accel_(accel), lights_(lights), rays_(camera, st.width, st.height), st_(st), film_(film),
+          direct_(st.directSamples > 0 && lights && !lights->empty()), withFilm_(st.directSpp > 0) {}
+
+    // S camera samples, an eye sample each where the ray's specular chain ends. Without a
+    // direct film they also take the emission, albedo, normal and direct light.
+    void receivers(int x, int y, EyeSamples& row) const {
+        const uint32_t pixel = pixelOf(x, y);
+        const float invSpp = 1.f / float(st_.spp);
+        const uint64_t scramble = hashKey(st_.seed, Stage::Camera, pixel);
+        Vec3 unused(0.f);
+        Vec3& emission = withFilm_ ? unused : film_.layers[kEmission][pixel];
+        for (int s = 0; s < st_.spp; ++s) {
+            const uint32_t index = uint32_t(st_.firstSample + s);
+            Sampler sampler(st_.seed, Stage::Eye, pixelSampleKey(pixel, index));
+            followCameraRay(scene_, accel_, rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+                            Vec3(invSpp), st_.maxSpecularDepth, sampler, emission,
+                            [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
+                if (!withFilm_) addFeatures(pixel, invSpp, bsdf);
+                if (reflectsNothing(scene_.materials[sp.material])) return;
+                const Vec3 ng = glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng;
+                const Vec3 diffuse = weight * bsdf.diffuseReflectance();
+                if (bsdf.hasGlossyLobe()) {
+                    GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight), encodeUnit(wo),
+                                    bsdf.ggxAlpha()};
+                    row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
+                } else {
+                    row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
+                }
+                if (!direct_ || withFilm_) return;
+                const uint64_t key = pixelSampleKey(pixel, index);
+                Sampler ds(st_.seed, Stage::Direct, key);
+                addDirect(pixel, weight, estimateDirect(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
+                                                        hashKey(st_.seed, Stage::Direct, key, 1), ds));
+            });
+        }
+    }
+
+    // The direct film (docs/design.md §4): D camera samples of its own sequence, each with
+    // emission, albedo, normal and direct light, the light samples of all the pixel's film
+    // samples stratified as one sequence.
+    void directFilm(int x, int y) const {
+        if (!withFilm_) return;
+        const uint32_t pixel = pixelOf(x, y);
+        const float invFilm = 1.f / float(st_.directSpp);
+        const uint64_t scramble = hashKey(st_.seed, Stage::DirectFilm, pixel);
+        const uint64_t lightScramble = hashKey(st_.seed, Stage::DirectFilm, pixel, 1);
+        for (int s = 0; s < st_.directSpp; ++s) {
+            const uint32_t index = uint32_t(st_.firstDirectSample + s);
+            const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
+            Sampler sampler(st_.seed, Stage::DirectFilm, key);
+            followCameraRay(scene_, accel_, rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+                            Vec3(invFilm), st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
+                            [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
+                addFeatures(pixel, invFilm, bsdf);
+                if (!direct_ || reflectsNothing(scene_.materials[sp.material])) return;
+                Sampler ds(st_.seed, Stage::Direct, key);
+                addDirect(pixel, weight, estimateDirectAcrossSamples(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
+                                                                     lightScramble, index, ds));
+            });
+        }
+    }
+
+private:
+    uint32_t pixelOf(int x, int y) const { return uint32_t(y * st_.width + x); }
+    void addFeatures(uint32_t pixel, float weight, const Bsdf& bsdf) const {
+        film_.albedo[pixel] += weight * bsdf.albedo();
+        film_.normal[pixel] += weight * bsdf.shadingNormal();
+    }
+    void addDirect(uint32_t pixel, const Vec3& weight, const Vec3& l) const {
+        if (isFinite(l)) film_.layers[kDirect][pixel] += weight * l;
+    }
+
+    const Scene& scene_;
+    const RayAccel& accel_;
+    const LightSampler* lights_;
+    const CameraRays rays_;
+    const EyePassSettings& st_;
+    Film& film_;  // each pixel is written by the thread that owns its row only
+    const bool direct_, withFilm_;
+};
+
 }  // namespace
 
 EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
                      const EyePassSettings& st, ThreadPool& pool, Reporter& reporter) {
-    const bool direct = st.directSamples > 0 && lights && !lights->empty();
-    // With a direct film the receivers add nothing to the film: its own samples do.
-    const bool film = st.directSpp > 0;
     EyePass out;
     out.film = Film(st.width, st.height);
-    CameraRays rays(camera, st.width, st.height);
-    const float invSpp = 1.f / float(st.spp);
+    const EyePassTracer tracer(scene, accel, lights, camera, st, out.film);
     std::vector<EyeSamples> rows(st.height);
-
-    // Direct light at a non-specular point seen through a camera sample (pixel, index) of the
-    // given stage's sequence, weighted.
-    auto addDirect = [&](uint32_t pixel, const Vec3& weight, const Vec3& l) {
-        if (isFinite(l)) out.film.layers[kDirect][pixel] += weight * l;
-    };
-
     reporter.begin("eye pass", st.height, "rows");
     pool.parallelFor(st.height, 4, [&](int64_t y0, int64_t y1, int) {
         for (int64_t y = y0; y < y1; ++y) {
             EyeSamples& row = rows[y];
             row.reserve(size_t(st.width) * st.spp);
             for (int x = 0; x < st.width; ++x) {
-                const uint32_t pixel = uint32_t(y * st.width + x);
-                Vec3& emission = out.film.layers[kEmission][pixel];
-                Vec3 noEmission(0.f);
-                // The receivers: S camera samples, an eye sample each where the ray's chain ends.
-                const uint64_t scramble = hashKey(st.seed, Stage::Camera, pixel);
-                for (int s = 0; s < st.spp; ++s) {
-                    const uint32_t index = uint32_t(st.firstSample + s);
-                    const Vec2 jitter = sobol2D(index, scramble);
-                    Sampler sampler(st.seed, Stage::Eye, pixelSampleKey(pixel, index));
-                    followCameraRay(scene, accel, rays.origin(), rays.direction(Vec2(float(x), float(y)) + jitter), Vec3(invSpp),
-                                    st.maxSpecularDepth, sampler, film ? noEmission : emission,
-                                    [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
-                        if (!film) {
-                            out.film.albedo[pixel] += invSpp * bsdf.albedo();
-                            out.film.normal[pixel] += invSpp * bsdf.shadingNormal();
-                        }
-                        if (reflectsNothing(scene.materials[sp.material])) return;
-                        const Vec3 ng = glm::dot(sp.ng, wo) >= 0.f ? sp.ng : -sp.ng;
-                        const Vec3 diffuse = weight * bsdf.diffuseReflectance();
-                        if (bsdf.hasGlossyLobe()) {
-                            GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight),
-                                            encodeUnit(wo), bsdf.ggxAlpha()};
-                            row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
-                        } else {
-                            row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
-                        }
-                        if (direct && !film) {
-                            const uint64_t key = pixelSampleKey(pixel, index);
-                            Sampler ds(st.seed, Stage::Direct, key);
-                            addDirect(pixel, weight, estimateDirect(accel, *lights, sp, bsdf, wo, st.directSamples,
-                                                                    hashKey(st.seed, Stage::Direct, key, 1), ds));
-                        }
-                    });
-                }
-                // The direct film: its own D camera samples, each with emission, direct light,
-                // albedo and normal (docs/design.md §4).
-                if (!film) continue;
-                const float invFilm = 1.f / float(st.directSpp);
-                const uint64_t filmScramble = hashKey(st.seed, Stage::DirectFilm, pixel);
-                const uint64_t lightScramble = hashKey(st.seed, Stage::DirectFilm, pixel, 1);
-                for (int s = 0; s < st.directSpp; ++s) {
-                    const uint32_t index = uint32_t(st.firstDirectSample + s);
-                    const Vec2 jitter = sobol2D(index, filmScramble);
-                    const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
-                    Sampler sampler(st.seed, Stage::DirectFilm, key);
-                    followCameraRay(scene, accel, rays.origin(), rays.direction(Vec2(float(x), float(y)) + jitter), Vec3(invFilm),
-                                    st.maxSpecularDepth, sampler, emission,
-                                    [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
-                        out.film.albedo[pixel] += invFilm * bsdf.albedo();
-                        out.film.normal[pixel] += invFilm * bsdf.shadingNormal();
-                        // The light samples of all the pixel's film samples: one sequence.
-                        if (direct && !reflectsNothing(scene.materials[sp.material])) {
-                            Sampler ds(st.seed, Stage::Direct, key);
-                            addDirect(pixel, weight, estimateDirectAcrossSamples(accel, *lights, sp, bsdf, wo, st.directSamples,
-                                                                                 lightScramble, index, ds));
-                        }
-                    });
-                }
+                tracer.receivers(x, int(y), row);
+                tracer.directFilm(x, int(y));
             }
             reporter.advance(1);
         }
