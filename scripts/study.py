@@ -11,8 +11,8 @@
 For each scene (default: every scene of data/):
   1. a converged reference from raysplat's path tracer (two seeds, cached in OUT), itself
      checked against Mitsuba 3 (validate_mitsuba.py);
-  2. raysplat at its defaults (direct light sampled at every eye sample, 100 000 photons a
-     pass split 0/50/30) at increasing budgets: `--passes P` for each P of --passes, each
+  2. raysplat at its defaults (direct light sampled in a direct film, visibility by rays,
+     100 000 photons a pass split 0/50/30) at increasing budgets: `--passes P` for each P of --passes, each
      timed;
   3. the paper's own estimator (`--direct photons --passes 1`: direct light from photons,
      split 20/50/30) and, at the same settings, splatting without visibility (the paper's
@@ -62,7 +62,7 @@ CROPS = {"cornell_box": (16, 120, 128, 128), "glossy_box": (24, 136, 112, 112),
          "direct_light": (20, 48, 112, 112), "two_rooms_gap": (8, 80, 128, 128),
          "two_rooms_sealed": (8, 80, 128, 128), "caustic_pool": (64, 96, 128, 128),
          "point_shadows": (24, 40, 128, 128), "interior": (112, 96, 128, 128)}
-DEFAULT_PASSES = 1  # raysplat's default --passes: the run whose layers and bias are shown
+DEFAULT_PASSES = 8  # raysplat's default --passes: the run whose layers and bias are shown
 PAPER = ["--direct", "photons", "--passes", 1]  # the paper's estimator (its split is then the default)
 LAYER_NAMES = ("direct", "indirect", "caustic", "beauty")
 
@@ -423,8 +423,9 @@ def results_markdown(results, machine, args, plot_png, pictures):
     passes = ", ".join(str(p) for p in args.passes)
     out = [f"Measured by `scripts/run.sh study` (`scripts/study.py`) on {machine['date']}: {machine['cpu']}, "
            f"{machine['threads']} hardware threads, {machine['os']}, raysplat commit {machine['commit']}. "
-           f"Images {args.size}×{args.size}; raysplat at its defaults (4 eye samples per pixel, direct light by "
-           "sampling at every eye sample, 100000 photons per pass split 0/50/30 %, grid 192), passes varied "
+           f"Images {args.size}×{args.size}; raysplat at its defaults (4 receivers and a direct film of 16 samples "
+           "per pixel and pass, visibility by rays with the kernels' coverage measured, 100000 photons per pass "
+           "split 0/50/30 %, grid 192), passes varied "
            f"({passes}: each pass new eye samples and photons, kernels shrinking). The paper's estimator "
            "(`--direct photons --passes 1`: direct light from photons too, split 20/50/30 %) is measured once "
            "per scene, and so is splatting without visibility at its settings (the paper's Fig. 4b). Each time "
