@@ -12,8 +12,9 @@ against a converged path-traced reference (rendered once and kept in out/, sever
 by doubling its samples per pixel.
 
 An extra row, not in the paper, measures raysplat's current default the same way
-(`--direct sample`: direct light by light sampling at every eye sample, photons split
-0/50/30, the default number of passes), with the path tracer's equal-error time for it.
+(`--direct sample`: direct light by light sampling in a direct film, visibility by rays with
+the kernels' coverage measured, photons split 0/50/30, the default number of passes), with
+the path tracer's equal-error time for it.
 Timings are medians: the machine may be shared.
 """
 import argparse
