@@ -106,13 +106,13 @@ Arguments parseRender(int argc, char** argv) {
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
                 "(Herzog & Seidel 2007): 8 passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
-                "with kernels shrinking from pass to pass. Direct light is sampled at every eye sample, as a path\n"
-                "tracer does, and a photon reaches the eye samples that see its origin, its kernel's light kept whole\n"
-                "past edges and corners. '--direct photons --passes 1' is the paper's own estimator (4 samples a\n"
-                "pixel, 100000 photons split 20/50/30, GPU voxelization into an occlusion mask of grid 192, no\n"
-                "coverage correction). Outputs are written\n"
-                "atomically: a failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or\n"
-                "with fewer passes than ranks each pass's photons, are divided between the ranks: the same image.");
+                "with kernels shrinking from pass to pass. Direct light and emission are sampled in a film of their\n"
+                "own camera samples, as a path tracer does, and a photon reaches the eye samples that see its\n"
+                "origin, its kernel's light kept whole past edges and corners. '--direct photons --passes 1' is\n"
+                "the paper's own estimator (4 samples a pixel, 100000 photons split 20/50/30, GPU voxelization\n"
+                "into an occlusion mask of grid 192, no coverage correction). Outputs are written atomically: a\n"
+                "failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or with fewer\n"
+                "passes than ranks each pass's photons, are divided between the ranks: the same image.");
     cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});
