@@ -16,6 +16,8 @@ namespace rs {
 
 namespace {
 
+// Surfaces a probe follows at most: past eight crossings a line is deep inside closed geometry,
+// where every crossing is hidden from x(i−1) anyway.
 constexpr int kMaxCrossings = 8;
 constexpr float kGoldenTurn = 0.38196601f;  // 2 − φ: successive probes a golden angle apart
 
