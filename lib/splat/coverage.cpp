@@ -16,8 +16,8 @@ namespace rs {
 
 namespace {
 
-// Surfaces a probe follows at most: past eight crossings a line is deep inside closed geometry,
-// where every crossing is hidden from x(i−1) anyway.
+// Surfaces a probe follows at most, a bound on its work: a line crosses more only through rows of
+// thin parts, and most of those crossings are hidden from x(i−1) by the ones before them.
 constexpr int kMaxCrossings = 8;
 constexpr float kGoldenTurn = 0.38196601f;  // 2 − φ: successive probes a golden angle apart
 
