@@ -258,6 +258,9 @@ def bad_setting_tests():
         case("--passes 0", ["--passes", "0", "--width", "16"], "--passes"),
         case("--alpha 2", ["--alpha", "2", "--width", "16"], "--alpha"),
         case("--light-samples 0", ["--light-samples", "0", "--width", "16"], "--light-samples"),
+        case("--visibility bogus", ["--visibility", "bogus", "--width", "16"], "--visibility", "bogus", "mask"),
+        case("--coverage-probes 17", ["--coverage-probes", "17", "--width", "16"], "--coverage-probes", "0..16"),
+        case("--direct-spp -1", ["--direct-spp", "-1", "--width", "16"], "--direct-spp"),
         case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
         # Settings within their ranges that the machine cannot hold fail before allocating.
         case("--photons 1000000000", ["--photons", "1000000000", "--width", "16"], "needs about", "photons",
