@@ -120,6 +120,14 @@ bool RayAccel::occluded(const Vec3& o, const Vec3& d, float tmax) const {
     return ray.tfar < 0.f;
 }
 
+// Lane i of a packet: o + t·d for t in (0, tfar).
+static void setLane(RTCRay16& r, int i, const Vec3& o, const Vec3& d, float tfar) {
+    r.org_x[i] = o.x, r.org_y[i] = o.y, r.org_z[i] = o.z;
+    r.dir_x[i] = d.x, r.dir_y[i] = d.y, r.dir_z[i] = d.z;
+    r.tnear[i] = 0.f, r.tfar[i] = tfar, r.time[i] = 0.f;
+    r.mask[i] = 0xffffffffu, r.id[i] = uint32_t(i), r.flags[i] = 0;
+}
+
 uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -129,11 +137,8 @@ uint32_t RayAccel::occludedToPoint(const Vec3* from, int count, const Vec3& to) 
     for (int i = 0; i < kPacket; ++i) {
         const bool live = i < count;
         valid[i] = live ? -1 : 0;
-        const Vec3 o = live ? from[i] : to, d = to - o;
-        rays.org_x[i] = o.x, rays.org_y[i] = o.y, rays.org_z[i] = o.z;
-        rays.dir_x[i] = d.x, rays.dir_y[i] = d.y, rays.dir_z[i] = d.z;
-        rays.tnear[i] = 0.f, rays.tfar[i] = 1.f, rays.time[i] = 0.f;
-        rays.mask[i] = 0xffffffffu, rays.id[i] = uint32_t(i), rays.flags[i] = 0;
+        const Vec3 o = live ? from[i] : to;
+        setLane(rays, i, o, to - o, 1.f);
     }
     rtcOccluded16(valid, impl_->scene, &ctx, &rays);
     uint32_t hidden = 0;
@@ -152,11 +157,7 @@ uint32_t RayAccel::intersectParallel(const Vec3* from, int count, const Vec3& di
     for (int i = 0; i < kPacket; ++i) {
         const bool live = i < count;
         valid[i] = live ? -1 : 0;
-        const Vec3 o = live ? from[i] : from[0];
-        rh.ray.org_x[i] = o.x, rh.ray.org_y[i] = o.y, rh.ray.org_z[i] = o.z;
-        rh.ray.dir_x[i] = dir.x, rh.ray.dir_y[i] = dir.y, rh.ray.dir_z[i] = dir.z;
-        rh.ray.tnear[i] = 0.f, rh.ray.tfar[i] = live ? tmax[i] : 0.f, rh.ray.time[i] = 0.f;
-        rh.ray.mask[i] = 0xffffffffu, rh.ray.id[i] = uint32_t(i), rh.ray.flags[i] = 0;
+        setLane(rh.ray, i, live ? from[i] : from[0], dir, live ? tmax[i] : 0.f);
         rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect16(valid, impl_->scene, &ctx, &rh);
