@@ -73,13 +73,14 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
 }  // namespace
 
 void CoverageStats::add(const CoverageStats& o) {
-    photons += o.photons, partial += o.partial, uncovered += o.uncovered;
+    photons += o.photons, partial += o.partial, uncovered += o.uncovered, shrunk += o.shrunk;
     coverageSum += o.coverageSum;
 }
 
 void CoverageStats::report(Stats& stats) const {
     stats.setCount("coverage_photons_partial", double(partial));
     stats.setCount("coverage_photons_uncovered", double(uncovered));
+    stats.setCount("coverage_photons_shrunk", double(shrunk));
     stats.setCount("coverage_mean", photons ? coverageSum / double(photons) : 1.0);
 }
 
@@ -94,7 +95,15 @@ void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const Co
         for (int64_t i = b; i < e; ++i) {
             PhotonRay& ray = photons.rays[size_t(i)];
             const uint64_t key = hashKey(settings.seed, Stage::Coverage, settings.pass << PhotonSettings::kPathsPerPassBits | uint64_t(i));
-            const float c = coverageOf(accel, ray, settings.probes, toUnitFloat(uint32_t(key)));
+            const float turn = toUnitFloat(uint32_t(key));
+            float c = coverageOf(accel, ray, settings.probes, turn);
+            if (c < CoverageSettings::kShrinkBelow) {
+                // The same absolute reach past x(i): it is the scene's bounds or h·tan θ at the hit.
+                ray.radius *= 0.5f;
+                ray.reach *= 2.f;
+                c = coverageOf(accel, ray, settings.probes, turn);
+                ++st.shrunk;
+            }
             ++st.photons;
             st.coverageSum += c;
             if (c < 1.f) ++st.partial;
