@@ -170,6 +170,25 @@ Arguments parseRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
     cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default 0.667)",
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
+    cmd.add({"--env", "FILE",
+             "environment light: an equirectangular OpenEXR, oriented as Blender's world (its centre column along +X, "
+             "its top row up), seen through openings, sampled for direct light and sending photons",
+             [&](const std::string& v) { cfg.env = v; }});
+    cmd.add({"--env-strength", "S", "multiplies the --env image (default 1)",
+             [&](const std::string& v) { cfg.envStrength = parseFloat("--env-strength", v); }});
+    cmd.add({"--env-rotation", "DEG", "turns the --env image about the up axis as Blender's Mapping node Z rotation in the world shader does (default 0)",
+             [&](const std::string& v) { cfg.envRotation = parseFloat("--env-rotation", v); }});
+    cmd.add({"--sky", "R,G,B", "a uniform sky of this radiance, W/(m^2 sr) (one number: grey; default none)",
+             [&](const std::string& v) {
+                 ClassTriple c;
+                 if (v.find(',') == std::string::npos) {
+                     const float g = parseFloat("--sky", v);
+                     c = {g, g, g};
+                 } else {
+                     parseTriple("--sky", v, c);
+                 }
+                 cfg.sky = Vec3(c[0], c[1], c[2]);
+             }});
     cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
     cmd.add({"--seed", "N", "seed of every random sequence (default 0)", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",

@@ -91,6 +91,12 @@ void RenderConfig::validate() const {
     requireRange("threads", threads, 0, 1024);
     requireRange("time-limit", timeLimit, 0, 1e7);
     requireRange("exposure", exposure, -50, 50);
+    requireRange("env-strength", envStrength, 0, 1e9);
+    requireRange("env-rotation", envRotation, -36000, 36000);
+    for (int c = 0; c < 3; ++c) requireRange("sky", sky[c], 0, 1e9);
+    if (!env.empty() && !isBlack(sky)) throw Error(ErrorKind::Config, "`env` and `sky` both give an environment: choose one");
+    std::error_code envError;
+    if (!env.empty() && !std::filesystem::is_regular_file(env, envError)) throw Error(ErrorKind::Io, env + ": no such file");
     validateGrid();
     if (output.empty()) throw Error(ErrorKind::Config, "no output file: give `output` FILE.exr");
     // Refuse before rendering, not after: every output's directory must exist.
@@ -103,6 +109,11 @@ void RenderConfig::validate() const {
     }
     double pixels = double(width ? width : height) * double(height ? height : width);
     if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
+}
+
+Environment RenderConfig::environment() const {
+    if (!env.empty()) return loadEnvironment(env, envStrength, envRotation * kPi / 180.f);
+    return Environment::uniform(sky);
 }
 
 void RenderConfig::validateGrid() const {
@@ -143,6 +154,12 @@ ImageAttributes RenderConfig::attributes() const {
             {"passes", std::to_string(passCount())},
             {"grid", std::to_string(grid)},
             {"voxelizer", voxelizer}};
+    if (!env.empty()) {
+        a["env"] = env;
+        a["envStrength"] = std::to_string(envStrength);
+        a["envRotation"] = std::to_string(envRotation);
+    }
+    if (!isBlack(sky)) a["sky"] = tripleText({sky.x, sky.y, sky.z});
     if (splats()) {
         const ClassTriple used = photonSplit();
         a["direct"] = directMethodName(direct);

@@ -9,6 +9,7 @@
 #include "grid/grid_stage.h"
 #include "output/image_io.h"
 #include "path/path.h"
+#include "scene/environment.h"
 #include "splat/coverage.h"
 #include "splat/eye.h"
 #include "splat/photons.h"
@@ -66,6 +67,15 @@ struct RenderConfig {
     // Kernel shrinkage between passes (Knaus & Zwicker 2011): r²(i+1) = r²(i)·(i + α)/(i + 1).
     float alpha = 2.f / 3.f;
     float exposure = 0.f;    // PNG preview, stops
+
+    // The environment light (docs/design.md §4): an equirectangular OpenEXR `env` in Blender's
+    // world orientation, times `envStrength`, turned `envRotation` degrees about the up axis as
+    // Blender's Mapping node Z rotation turns it; or a uniform sky of radiance `sky` (black: none).
+    std::string env;
+    float envStrength = 1.f;
+    float envRotation = 0.f;
+    Vec3 sky{0.f};
+    Environment environment() const;  // loads `env`; throws Error naming the file
 
     // Photons (docs/design.md §7): total M, the split direct/indirect/caustic, the photons wanted
     // under a kernel (k) and the radius clamps in voxels, per class.

@@ -298,9 +298,10 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     // Ray-tracing acceleration structure and the lights.
     Timer t;
     RayAccel accel(scene, pool.size());
-    LightSampler lights(scene);
+    const Environment environment = cfg.environment();
+    LightSampler lights(scene, &environment);
     stats.addTime("bvh", t.seconds());
-    if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights: the image will be black");
+    if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights and no environment: the image will be black");
 
     const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats, ranks};
     if (cfg.splats()) {

@@ -262,6 +262,12 @@ def bad_setting_tests():
         case("--coverage-probes 17", ["--coverage-probes", "17", "--width", "16"], "--coverage-probes", "0..16"),
         case("--direct-spp -1", ["--direct-spp", "-1", "--width", "16"], "--direct-spp"),
         case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
+        case("--env missing", ["--env", "no_such_sky.exr", "--width", "16"], "no_such_sky.exr", "no such file"),
+        case("--env not an EXR", ["--env", CORNELL, "--width", "16", "--spp", "1"], CORNELL, "OpenEXR"),
+        case("--env with --sky", ["--env", CORNELL, "--sky", "1", "--width", "16"], "--env", "--sky"),
+        case("--sky -1", ["--sky", "-1", "--width", "16"], "--sky"),
+        case("--sky 1,2", ["--sky", "1,2", "--width", "16"], "--sky", "1,2"),
+        case("--env-strength -1", ["--env-strength", "-1", "--width", "16"], "--env-strength"),
         # Settings within their ranges that the machine cannot hold fail before allocating.
         case("--photons 1000000000", ["--photons", "1000000000", "--width", "16"], "needs about", "photons",
              "available"),

@@ -45,7 +45,11 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
     for (int depth = 0; depth < maxDepth; ++depth) {
         SurfacePoint sp;
         float t;
-        if (!accel.intersect(o, d, kInf, sp, t)) break;
+        if (!accel.intersect(o, d, kInf, sp, t)) {
+            // The environment: MIS against the light sampling of the previous vertex.
+            out.layer[cls.layerOfHit()] += beta * environmentSeen(lights, prevDelta ? 0.f : prevPdf, d);
+            break;
+        }
         const Material& m = scene.materials[sp.material];
 
         // Emitters: front face only; MIS against the light sampling of the previous vertex.

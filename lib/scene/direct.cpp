@@ -26,6 +26,13 @@ float emitterHitWeight(const LightSampler& lights, float bsdfPdf, const Vec3& fr
     return powerHeuristic(bsdfPdf, lights.pdfLi(from, hit.tri, hit.p));
 }
 
+Vec3 environmentSeen(const LightSampler& lights, float bsdfPdf, const Vec3& dir) {
+    const Environment* env = lights.environment();
+    if (!env) return Vec3(0.f);
+    const float w = bsdfPdf > 0.f ? powerHeuristic(bsdfPdf, lights.pdfEnvironment(dir)) : 1.f;
+    return env->radiance(dir) * w;
+}
+
 namespace {
 
 // n light samples, (uChoice, u) = lightNumbers(k), and n BSDF samples from `sampler`, MIS-combined.
@@ -45,7 +52,10 @@ Vec3 directSamples(const RayAccel& accel, const LightSampler& lights, const Surf
         if (!(bs.pdf > 0.f) || isBlack(bs.weight) || bs.delta) continue;
         SurfacePoint hit;
         float t;
-        if (!accel.intersect(offsetRayOrigin(sp, bs.wi), bs.wi, kInf, hit, t)) continue;
+        if (!accel.intersect(offsetRayOrigin(sp, bs.wi), bs.wi, kInf, hit, t)) {
+            sum += bs.weight * environmentSeen(lights, bs.pdf, bs.wi);
+            continue;
+        }
         const Material& m = scene.materials[hit.material];
         if (!m.isEmissive() || !hit.frontFace) continue;
         sum += bs.weight * m.emission * emitterHitWeight(lights, bs.pdf, sp.p, hit);

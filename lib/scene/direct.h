@@ -23,6 +23,12 @@ Vec3 sampleLightDirect(const RayAccel& accel, const LightSampler& lights, const 
 // `bsdfPdf`) hitting the emitter at `hit`: the other half of sampleLightDirect's weight.
 float emitterHitWeight(const LightSampler& lights, float bsdfPdf, const Vec3& from, const SurfacePoint& hit);
 
+// The environment's radiance along `dir` met by a ray that left the scene, MIS-weighted as
+// emitterHitWeight does for a BSDF-sampled ray (solid-angle pdf `bsdfPdf`); `bsdfPdf` 0: a
+// ray no light sampling could have found (a camera ray, a specular bounce), weight 1. Black
+// without an environment.
+Vec3 environmentSeen(const LightSampler& lights, float bsdfPdf, const Vec3& dir);
+
 // Direct light leaving `sp` towards wo, averaged over n stratified light samples and n BSDF
 // samples, MIS-combined. `scramble` and `sampler` make it a pure function of the caller's
 // (seed, pixel, sample).

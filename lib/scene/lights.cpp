@@ -1,13 +1,14 @@
 // Lights chosen in proportion to their luminance power: emissive triangles (Le·π·A, emitting
-// from the front face only) and KHR_lights_punctual lights (4π·I for points, the cone integral
-// for spots, E·π·r² over the scene's bounding disc for directional lights).
+// from the front face only), KHR_lights_punctual lights (4π·I for points, the cone integral
+// for spots, E·π·r² over the scene's bounding disc for directional lights) and the
+// environment (∫L dω · π·r²: what it sends through that disc from every direction).
 #include "scene/lights.h"
 
 #include "core/sampling.h"
 
 namespace rs {
 
-LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
+LightSampler::LightSampler(const Scene& scene, const Environment* environment) : scene_(scene) {
     sceneCenter_ = scene.bounds.center();
     sceneRadius_ = std::max(0.5f * scene.bounds.diagonal(), 1e-4f);
     entryOfTriangle_.assign(scene.triangleCount(), -1);
@@ -17,12 +18,17 @@ LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
         float power = luminance(m.emission) * kPi * scene.triangleArea(t);
         if (!(power > 0.f)) continue;
         entryOfTriangle_[t] = int32_t(entries_.size());
-        entries_.push_back({true, uint32_t(t), power});
+        entries_.push_back({Kind::Area, uint32_t(t), power});
     }
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PunctualLight& l = scene.lights[i];
         const float power = l.power(luminance(l.intensity), sceneRadius_);
-        if (power > 0.f) entries_.push_back({false, uint32_t(i), power});
+        if (power > 0.f) entries_.push_back({Kind::Punctual, uint32_t(i), power});
+    }
+    if (environment && !environment->black()) {
+        environment_ = environment;
+        environmentEntry_ = int32_t(entries_.size());
+        entries_.push_back({Kind::Environment, 0, luminance(environment->integral()) * kPi * sqr(sceneRadius_)});
     }
     double total = 0.0;
     for (const Entry& e : entries_) total += e.power;
@@ -37,8 +43,12 @@ LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
 size_t LightSampler::choose(float u, float& prob) const {
     size_t i = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
     i = std::min(i, cdf_.size() - 1);
-    prob = cdf_[i] - (i ? cdf_[i - 1] : 0.f);
+    prob = probability(i);
     return i;
+}
+
+float LightSampler::pdfEnvironment(const Vec3& dir) const {
+    return environment_ ? probability(size_t(environmentEntry_)) * environment_->pdf(dir) : 0.f;
 }
 
 float LightSampler::withinChoice(float u) const {
@@ -54,7 +64,16 @@ LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
     float prob;
     const Entry& e = entries_[choose(uChoice, prob)];
     if (!(prob > 0.f)) return s;
-    if (e.area) {
+    if (e.kind == Kind::Environment) {
+        float pdfDir;
+        s.wi = environment_->sample(u, pdfDir);
+        if (!(pdfDir > 0.f)) return s;
+        s.dist = kInf;
+        s.radiance = environment_->radiance(s.wi);
+        s.pdf = prob * pdfDir;
+        return s;
+    }
+    if (e.kind == Kind::Area) {
         const Vec3* v = &scene_.positions[3 * e.index];
         Vec2 b = sampleUniformTriangle(u);
         Vec3 pl = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
@@ -90,7 +109,7 @@ LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
 float LightSampler::pdfLi(const Vec3& p, uint32_t tri, const Vec3& pl) const {
     int32_t e = entryOfTriangle_[tri];
     if (e < 0) return 0.f;
-    float prob = cdf_[e] - (e ? cdf_[e - 1] : 0.f);
+    float prob = probability(size_t(e));
     Vec3 d = pl - p;
     float dist2 = glm::dot(d, d);
     float cosL = std::abs(glm::dot(d, scene_.geometricNormal(tri))) / std::sqrt(dist2);
@@ -106,7 +125,22 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
     const Entry& e = entries_[ei];
     s.choiceProb = prob;
     if (!(prob > 0.f)) return s;
-    if (e.area) {
+    if (e.kind == Kind::Environment) {
+        // Like a directional light from a sampled direction: a disc of the scene's bounding
+        // radius perpendicular to it, outside the scene; Le·πr² / (pdf(ω)·pChoice).
+        float pdfDir;
+        const Vec3 wi = environment_->sample(uDir, pdfDir);
+        if (!(pdfDir > 0.f)) return s;
+        Frame f(-wi);
+        Vec2 d = sampleUniformDisk(uPos) * sceneRadius_;
+        s.origin = sceneCenter_ + sceneRadius_ * wi + d.x * f.s + d.y * f.t;
+        s.dir = -wi;
+        s.collimated = true;
+        s.pdfChoicePos = prob / (kPi * sqr(sceneRadius_));
+        s.flux = environment_->radiance(wi) * (kPi * sqr(sceneRadius_) / (pdfDir * prob));
+        return s;
+    }
+    if (e.kind == Kind::Area) {
         // Uniform point on the triangle, cosine-weighted direction around its front normal.
         const Vec3* v = &scene_.positions[3 * e.index];
         Vec2 b = sampleUniformTriangle(uPos);

@@ -1,10 +1,12 @@
 // Light sampling shared by the path tracer (next-event estimation, MIS) and the photon
-// tracer (emission): every emissive triangle and punctual light, chosen by power.
+// tracer (emission): every emissive triangle and punctual light, and the environment, chosen
+// by power.
 #pragma once
 
 #include <vector>
 
 #include "scene/accel.h"
+#include "scene/environment.h"
 
 namespace rs {
 
@@ -12,7 +14,7 @@ struct LightSample {
     Vec3 wi{0.f};        // unit, from the shading point towards the light
     float dist = 0.f;    // to the light point (kInf for directional)
     Vec3 radiance{0.f};  // Li at the shading point, before the cosine and visibility
-    float pdf = 0.f;     // solid-angle pdf for area lights, choice probability for delta lights
+    float pdf = 0.f;     // solid-angle pdf for area lights and the environment, choice probability for delta lights
     bool delta = false;
 };
 
@@ -23,14 +25,19 @@ struct EmissionSample {
     float pdfChoicePos = 0.f;    // pChoice · pdf of the position (per area; 1 for a point)
     float choiceProb = 0.f;      // probability of having chosen this light
     Vec3 normal{0.f};            // the emitting surface's normal (area lights), else 0
-    bool collimated = false;     // directional light: density is per perpendicular area
+    bool collimated = false;     // directional light or environment: density is per perpendicular area
 };
 
 class LightSampler {
 public:
-    explicit LightSampler(const Scene& scene);
+    // `environment`: null or black for none; it must outlive the sampler.
+    explicit LightSampler(const Scene& scene, const Environment* environment = nullptr);
 
     bool empty() const { return cdf_.empty(); }
+    // The environment, or null: what a ray that leaves the scene sees.
+    const Environment* environment() const { return environment_; }
+    // Solid-angle pdf that sampleLi picks direction `dir` of the environment.
+    float pdfEnvironment(const Vec3& dir) const;
     // Next-event estimation towards one light chosen by power.
     LightSample sampleLi(const Vec3& p, float uChoice, Vec2 u) const;
     // Where u lies inside the interval of the light it picks, in [0, 1): one number both chooses
@@ -43,17 +50,21 @@ public:
     EmissionSample sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const;
 
 private:
+    enum class Kind : uint8_t { Area, Punctual, Environment };
     struct Entry {
-        bool area = false;
+        Kind kind = Kind::Area;
         uint32_t index = 0;  // triangle or punctual light
         float power = 0.f;
     };
+    float probability(size_t entry) const { return cdf_[entry] - (entry ? cdf_[entry - 1] : 0.f); }
     size_t choose(float u, float& prob) const;
 
     const Scene& scene_;
     std::vector<Entry> entries_;
     std::vector<float> cdf_;              // normalised, cdf_.back() == 1
     std::vector<int32_t> entryOfTriangle_;  // -1 for non-emissive triangles
+    const Environment* environment_ = nullptr;
+    int32_t environmentEntry_ = -1;
     Vec3 sceneCenter_;
     float sceneRadius_ = 1.f;
 };

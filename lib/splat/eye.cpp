@@ -147,15 +147,18 @@ bool reflectsNothing(const Material& m) {
 
 // Follows a camera ray of weight `weight` through specular surfaces to the first non-specular
 // one, adding the emitters met on the way (front faces) to `emission`; there calls
-// atSurface(sp, bsdf, wo, weight). Returns without a call when the ray leaves the scene or the
-// chain ends.
+// atSurface(sp, bsdf, wo, weight). Returns without a call when the ray leaves the scene (adding
+// the environment it sees, if any) or the chain ends.
 template <class AtSurface>
-void followCameraRay(const Scene& scene, const RayAccel& accel, Vec3 o, Vec3 d, Vec3 weight, int maxDepth,
-                     Sampler& sampler, Vec3& emission, AtSurface&& atSurface) {
+void followCameraRay(const Scene& scene, const RayAccel& accel, const Environment* env, Vec3 o, Vec3 d, Vec3 weight,
+                     int maxDepth, Sampler& sampler, Vec3& emission, AtSurface&& atSurface) {
     for (int depth = 0; depth <= maxDepth; ++depth) {
         SurfacePoint sp;
         float t;
-        if (!accel.intersect(o, d, kInf, sp, t)) return;
+        if (!accel.intersect(o, d, kInf, sp, t)) {
+            if (env) emission += weight * env->radiance(d);
+            return;
+        }
         const Material& m = scene.materials[sp.material];
         if (m.isEmissive() && sp.frontFace) emission += weight * m.emission;
         const Vec3 wo = -d;
@@ -181,6 +184,8 @@ public:
         : scene_(scene), accel_(accel), lights_(lights), rays_(camera, st.width, st.height), st_(st), film_(film),
           direct_(st.directSamples > 0 && lights && !lights->empty()), withFilm_(st.directSpp > 0) {}
 
+    const Environment* environment() const { return lights_ ? lights_->environment() : nullptr; }
+
     // S camera samples, an eye sample each where the ray's specular chain ends. Without a
     // direct film they also take the emission, albedo, normal and direct light.
     void receivers(int x, int y, EyeSamples& row) const {
@@ -192,7 +197,7 @@ public:
         for (int s = 0; s < st_.spp; ++s) {
             const uint32_t index = uint32_t(st_.firstSample + s);
             Sampler sampler(st_.seed, Stage::Eye, pixelSampleKey(pixel, index));
-            followCameraRay(scene_, accel_, rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+            followCameraRay(scene_, accel_, environment(), rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
                             Vec3(invSpp), st_.maxSpecularDepth, sampler, emission,
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 if (!withFilm_) addFeatures(pixel, invSpp, bsdf);
@@ -228,7 +233,7 @@ public:
             const uint32_t index = uint32_t(st_.firstDirectSample + s);
             const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
             Sampler sampler(st_.seed, Stage::DirectFilm, key);
-            followCameraRay(scene_, accel_, rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+            followCameraRay(scene_, accel_, environment(), rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
                             Vec3(invFilm), st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 addFeatures(pixel, invFilm, bsdf);

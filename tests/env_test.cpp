@@ -1,0 +1,242 @@
+// The environment light (--env, --sky) against independent answers: its sampling density
+// against its own radiance, Blender's orientation pixel by pixel, a floor under a uniform sky
+// (L·ρ exactly), a floor under a sky with a bright patch (a brute-force sum over the image's
+// pixels), and photons from the sky against the path tracer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/log.h"
+#include "core/sampling.h"
+#include "output/image_io.h"
+#include "render.h"
+#include "scene/environment.h"
+#include "test_scenes.h"
+
+using namespace rs;
+using namespace rs::test;
+
+namespace {
+
+// A 2:1 image: a dim blue-grey sky, a warm patch ("sun") 30° above the horizon towards
+// u = 0.625, and a dark lower half.
+Environment patchedSky(std::vector<Vec3>* pixelsOut = nullptr, float rotation = 0.f, int w = 64, int h = 32) {
+    std::vector<Vec3> px(size_t(w) * h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            Vec3 L = y < h / 2 ? Vec3(0.4f, 0.5f, 0.7f) : Vec3(0.05f);
+            if (y == h / 3 - 1 && (x == 5 * w / 8 || x == 5 * w / 8 + 1)) L = Vec3(400.f, 360.f, 300.f);
+            px[size_t(y) * w + x] = L;
+        }
+    if (pixelsOut) *pixelsOut = px;
+    return Environment::image(w, h, px, 1.f, rotation);
+}
+
+// The direction at image point (u, v) of Blender's equirectangular mapping, in glTF's frame:
+// Blender (x, y, z) is glTF (x, z, −y); Blender's u = ½ − atan2(y, x)/2π, v from the top
+// = acos(z)/π.
+Vec3 blenderDirection(float u, float v) {
+    const float phi = 2.f * kPi * (0.5f - u), theta = kPi * v;
+    const Vec3 b(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    return {b.x, b.z, -b.y};
+}
+
+Camera lookAt(Vec3 from, Vec3 to, Vec3 up, float yfov) {
+    Camera c;
+    c.position = from;
+    c.forward = glm::normalize(to - from);
+    c.right = glm::normalize(glm::cross(c.forward, up));
+    c.up = glm::cross(c.right, c.forward);
+    c.yfov = yfov;
+    c.aspect = 1.f;
+    return c;
+}
+
+// A 40 m floor (ρ = 0.5) seen from 1 m above, looking down: no pixel sees past it.
+Scene openFloor() {
+    Scene s;
+    s.path = "open floor";
+    uint32_t floor = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
+    addQuad(s, {-20, 0, -20}, {-20, 0, 20}, {20, 0, 20}, {20, 0, -20}, floor);
+    s.cameras.push_back(lookAt({0, 1, 0}, {0, 0, 0}, {0, 0, -1}, 0.6f));
+    s.computeBounds();
+    return s;
+}
+
+RenderConfig envConfig(int width) {
+    RenderConfig cfg;
+    cfg.output = "unused.exr";
+    cfg.width = width;
+    cfg.height = width;
+    cfg.photons = 40000;
+    cfg.passes = 2;
+    return cfg;
+}
+
+// Writes `pixels` (w × h, top row first) as an EXR whose R, G, B are the image.
+std::string writeEnvironment(const TempDir& dir, const std::vector<Vec3>& pixels, int w, int h) {
+    Film film(w, h);
+    film.layers[kEmission] = pixels;
+    const std::string path = (dir.path() / "sky.exr").string();
+    writeExrTo(path, path, film, {});
+    return path;
+}
+
+}  // namespace
+
+TEST(Environment, SamplingDensityMatchesItsOwnPdfAndIntegral) {
+    const Environment env = patchedSky(nullptr, 0.7f);
+    Sampler rng(1, Stage::Test, 0);
+    DVec3 estimate(0.0);
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        float pdf;
+        const Vec3 d = env.sample(rng.get2D(), pdf);
+        ASSERT_GT(pdf, 0.f);
+        ASSERT_NEAR(glm::length(d), 1.f, 1e-4f);
+        EXPECT_NEAR(env.pdf(d), pdf, 2e-3f * pdf) << "direction " << d.x << "," << d.y << "," << d.z;
+        estimate += DVec3(env.radiance(d)) / double(pdf);
+    }
+    estimate /= double(n);
+    const Vec3 integral = env.integral();
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(estimate[c], integral[c], 0.01 * integral[c]);
+    // The pdf integrates to one: a midpoint sum over 8 × 8 cells a pixel.
+    double mass = 0.0;
+    const int nu = 64 * 8, nv = 32 * 8;
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+            const double theta = kPi * (j + 0.5) / nv, phi = 2.0 * kPi * (i + 0.5) / nu;
+            const Vec3 d(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)), float(std::sin(theta) * std::sin(phi)));
+            mass += env.pdf(d) * std::sin(theta) * (2.0 * kPi / nu) * (kPi / nv);
+        }
+    EXPECT_NEAR(mass, 1.0, 1e-3);
+}
+
+// Every pixel's centre, mapped as Blender maps it, reads that pixel back. Turned by 90° (a
+// Mapping node's Z rotation turns the lookup direction +Z to +X), the image's centre column
+// moves from +X to +Z: clockwise seen from above.
+TEST(Environment, OrientedAsBlendersWorld) {
+    const int w = 16, h = 8;
+    std::vector<Vec3> px(size_t(w) * h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) px[size_t(y) * w + x] = Vec3(float(x), float(y), 1.f);
+    const Environment env = Environment::image(w, h, px, 1.f, 0.f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const Vec3 L = env.radiance(blenderDirection((x + 0.5f) / w, (y + 0.5f) / h));
+            EXPECT_EQ(L.x, float(x)) << "pixel " << x << "," << y;
+            EXPECT_EQ(L.y, float(y)) << "pixel " << x << "," << y;
+        }
+    EXPECT_EQ(env.radiance(Vec3(1, 0.01f, 0)).x, float(w / 2));
+    EXPECT_EQ(env.radiance(Vec3(0, 1, 0)).y, 0.f);
+    const Environment turned = Environment::image(w, h, px, 2.f, 0.5f * kPi);
+    const Vec3 centre = turned.radiance(Vec3(-0.01f, 0.01f, 1));
+    EXPECT_EQ(centre.x, float(2 * (w / 2)));
+    EXPECT_EQ(centre.z, 2.f);
+}
+
+// Under a uniform sky of radiance L an unoccluded Lambert floor reflects exactly ρ·L, all of
+// it direct; the camera sees only the floor. Path tracer and splat alike.
+TEST(Environment, UniformSkyOnAnOpenFloorGivesAlbedoTimesRadiance) {
+    const Scene scene = openFloor();
+    RenderConfig cfg = envConfig(24);
+    cfg.sky = Vec3(2.f, 1.f, 0.5f);
+    const RenderResult splat = expectSamePixelsWhateverTheThreadCount(scene, cfg);
+    cfg.method = Method::Path;
+    cfg.spp = 256;
+    const RenderResult path = render(scene, cfg, silentReporter());
+    for (const RenderResult* r : {&splat, &path}) {
+        DVec3 sum(0.0);
+        for (const Vec3& v : r->film.layers[kDirect]) sum += DVec3(v);
+        sum /= double(r->film.pixelCount());
+        EXPECT_NEAR(sum.x, 1.0, 0.01);
+        EXPECT_NEAR(sum.y, 0.5, 0.005);
+        EXPECT_NEAR(sum.z, 0.25, 0.0025);
+        EXPECT_LT(layerMean(r->film, kIndirect), 1e-3);
+        EXPECT_EQ(layerMean(r->film, kEmission), 0.0);
+    }
+}
+
+// A sky with a bright patch, read from an EXR: the floor's radiance is ρ/π · Σ L·cos θ·ΔΩ over
+// the image's upper half, summed pixel by pixel (each pixel's solid angle exact, cos θ over it
+// integrated in closed form). The patch holds most of the light: without importance sampling
+// the estimate would be noise.
+TEST(Environment, SkyWithABrightPatchMatchesTheBruteForceIrradiance) {
+    TempDir dir;
+    std::vector<Vec3> px;
+    const int w = 64, h = 32;
+    patchedSky(&px, 0.f, w, h);
+    DVec3 irradiance(0.0);
+    for (int y = 0; y < h / 2; ++y) {
+        // ∫ cos θ sin θ dθ over the row, times 2π/w per pixel.
+        const double t0 = kPi * y / h, t1 = kPi * (y + 1.0) / h;
+        const double cosOmega = 2.0 * kPi / w * 0.5 * (std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0));
+        for (int x = 0; x < w; ++x) irradiance += DVec3(px[size_t(y) * w + x]) * cosOmega;
+    }
+    const DVec3 want = 0.5 / kPi * irradiance;
+
+    const Scene scene = openFloor();
+    RenderConfig cfg = envConfig(16);
+    cfg.env = writeEnvironment(dir, px, w, h);
+    const RenderResult splat = render(scene, cfg, silentReporter());
+    cfg.method = Method::Path;
+    cfg.spp = 64;
+    const RenderResult path = render(scene, cfg, silentReporter());
+    for (const RenderResult* r : {&splat, &path}) {
+        DVec3 sum(0.0);
+        for (const Vec3& v : r->film.layers[kDirect]) sum += DVec3(v);
+        sum /= double(r->film.pixelCount());
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], want[c], 0.02 * want[c]) << "channel " << c;
+    }
+}
+
+// The camera sees the environment where nothing is in the way, in the emission layer.
+TEST(Environment, CameraSeesTheSky) {
+    Scene scene;
+    scene.path = "empty";
+    uint32_t m = addMaterial(scene, MaterialKind::Lambert, Vec3(0.5f));
+    addQuad(scene, {-1, -5, -1}, {1, -5, -1}, {1, -5, 1}, {-1, -5, 1}, m);  // behind the camera
+    scene.cameras.push_back(lookAt({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.05f));
+    scene.computeBounds();
+    TempDir dir;
+    const int w = 16, h = 8;
+    std::vector<Vec3> px(size_t(w) * h, Vec3(0.1f));
+    for (int y : {h / 2 - 1, h / 2})  // +X, about the horizon: the corners of four pixels
+        for (int x : {w / 2 - 1, w / 2}) px[size_t(y) * w + x] = Vec3(3.f, 2.f, 1.f);
+    RenderConfig cfg = envConfig(4);
+    cfg.env = writeEnvironment(dir, px, w, h);
+    cfg.envStrength = 0.5f;
+    const RenderResult r = render(scene, cfg, silentReporter());
+    for (const Vec3& v : r.film.layers[kEmission]) {
+        EXPECT_FLOAT_EQ(v.x, 1.5f);
+        EXPECT_FLOAT_EQ(v.z, 0.5f);
+    }
+}
+
+// Photons from the sky: a floor and a wall meeting at a corner, open above. The wall's light
+// reflected by the floor (and the floor's by the wall) is the indirect layer; the splat's mean
+// agrees with the path tracer's.
+TEST(Environment, SkyPhotonsGiveThePathTracersIndirectLight) {
+    Scene s;
+    s.path = "corner under the sky";
+    uint32_t white = addMaterial(s, MaterialKind::Lambert, Vec3(0.7f));
+    addQuad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, white);
+    addQuad(s, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, white);
+    s.cameras.push_back(lookAt({0, 1.2f, 2.5f}, {0, 0.5f, -2}, {0, 1, 0}, 0.9f));
+    s.computeBounds();
+    TempDir dir;
+    std::vector<Vec3> px;
+    patchedSky(&px);
+    RenderConfig cfg = envConfig(32);
+    cfg.env = writeEnvironment(dir, px, 64, 32);
+    cfg.passes = 4;
+    const RenderResult splat = render(s, cfg, silentReporter());
+    cfg.method = Method::Path;
+    cfg.spp = 512;
+    cfg.passes = 1;
+    const RenderResult path = render(s, cfg, silentReporter());
+    const double ratio = layerMean(splat.film, kIndirect) / layerMean(path.film, kIndirect);
+    RecordProperty("indirect_ratio", std::to_string(ratio));
+    EXPECT_NEAR(ratio, 1.0, 0.03);
+    EXPECT_NEAR(layerMean(splat.film, kDirect) / layerMean(path.film, kDirect), 1.0, 0.02);
+}
