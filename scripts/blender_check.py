@@ -48,7 +48,8 @@ def say(msg):
     print(f"blender_check: {msg}", flush=True)
 
 
-def reexec_under_bpy_python():
+def reexec_under_bpy_python(script=__file__):
+    """Runs `script` again under the bpy interpreter, with this process's arguments."""
     if os.environ.get(REEXEC_MARK):
         return
     chosen = os.environ.get("RAYSPLAT_BPY_PYTHON")
@@ -60,7 +61,7 @@ def reexec_under_bpy_python():
         return
     os.environ[REEXEC_MARK] = "1"
     try:
-        os.execv(chosen, [chosen, str(Path(__file__).resolve())] + sys.argv[1:])
+        os.execv(chosen, [chosen, str(Path(script).resolve())] + sys.argv[1:])
     except OSError as e:
         say(f"cannot run {chosen}: {e}")
         sys.exit(FAIL if explicit or os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1" else SKIP)

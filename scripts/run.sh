@@ -41,17 +41,19 @@ install_missing() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
-# Blender as a Python module for the blender_check test: bpy 4.2.0 (the LTS for Python 3.11,
-# Debian 12's), pinned, in its own virtual environment. Without network it is skipped (the
-# test then skips), unless RAYSPLAT_REQUIRE_BLENDER=1 (CI) makes that a failure.
-readonly BPY_VERSION=4.2.0
+# Blender as a Python module for the Blender checks: bpy 4.2.0 (the LTS for Python 3.11,
+# Debian 12's), pinned, in its own virtual environment, with OpenEXR's Python module to read
+# raysplat's layered EXR files (Blender reads only their first layer). Without network it is
+# skipped (the checks then skip), unless RAYSPLAT_REQUIRE_BLENDER=1 (CI) makes that a failure.
+readonly BPY_VERSION=4.2.0 BPY_OPENEXR_VERSION=3.5.3
 blender_venv() {
   local python=.venv-blender/bin/python
-  if [ -x "$python" ] && "$python" -c "import importlib.metadata as m; assert m.version('bpy') == '$BPY_VERSION'" 2>/dev/null; then
+  if [ -x "$python" ] && "$python" -c "import importlib.metadata as m; assert m.version('bpy') == '$BPY_VERSION'; assert m.version('OpenEXR') == '$BPY_OPENEXR_VERSION'" 2>/dev/null; then
     return 0
   fi
   echo "raysplat: installing Blender's bpy $BPY_VERSION into .venv-blender/ (about 500 MB)"
-  if /usr/bin/python3 -m venv --clear .venv-blender && .venv-blender/bin/pip install -q "bpy==$BPY_VERSION"; then
+  if /usr/bin/python3 -m venv --clear .venv-blender &&
+     .venv-blender/bin/pip install -q "bpy==$BPY_VERSION" "OpenEXR==$BPY_OPENEXR_VERSION"; then
     return 0
   fi
   rm -rf .venv-blender
