@@ -240,3 +240,54 @@ TEST(Environment, SkyPhotonsGiveThePathTracersIndirectLight) {
     EXPECT_NEAR(ratio, 1.0, 0.03);
     EXPECT_NEAR(layerMean(splat.film, kDirect) / layerMean(path.film, kDirect), 1.0, 0.02);
 }
+
+// A closed room lit by the sun and a sky through one window of a twelfth of its wall: without
+// portals most photons land on the roof and the outer walls; with the window as a portal every
+// photon path starts through it. The light inside is the same: both splats' indirect light
+// agrees with the path tracer's.
+TEST(Portals, SunAndSkyPhotonsEnterThroughTheWindow) {
+    Scene s;
+    s.path = "room with a window";
+    uint32_t white = addMaterial(s, MaterialKind::Lambert, Vec3(0.7f));
+    // Inward-facing walls of x, z in [-2, 2], y in [0, 3]; the +X wall has a 1 m window.
+    addQuad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, white);   // floor
+    addQuad(s, {-2, 3, -2}, {2, 3, -2}, {2, 3, 2}, {-2, 3, 2}, white);   // ceiling
+    addQuad(s, {-2, 0, -2}, {2, 0, -2}, {2, 3, -2}, {-2, 3, -2}, white); // back, −Z
+    addQuad(s, {-2, 0, 2}, {-2, 3, 2}, {2, 3, 2}, {2, 0, 2}, white);     // front, +Z
+    addQuad(s, {-2, 0, -2}, {-2, 3, -2}, {-2, 3, 2}, {-2, 0, 2}, white); // −X
+    const float y0 = 1.f, y1 = 2.f, z0 = -0.5f, z1 = 0.5f;
+    addQuad(s, {2, 0, -2}, {2, 0, 2}, {2, y0, 2}, {2, y0, -2}, white);   // +X below the window
+    addQuad(s, {2, y1, -2}, {2, y1, 2}, {2, 3, 2}, {2, 3, -2}, white);   // above
+    addQuad(s, {2, y0, -2}, {2, y0, z0}, {2, y1, z0}, {2, y1, -2}, white);
+    addQuad(s, {2, y0, z1}, {2, y0, 2}, {2, y1, 2}, {2, y1, z1}, white);
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(Vec3(-1.f, -0.7f, 0.15f));
+    sun.intensity = Vec3(6.f, 5.5f, 5.f);
+    s.lights.push_back(sun);
+    s.cameras.push_back(lookAt({-1.6f, 1.6f, 1.6f}, {0.6f, 0.3f, -0.2f}, {0, 1, 0}, 1.1f));
+    s.computeBounds();
+    Scene withPortal = s;
+    withPortal.portals = {{2, y0, z0}, {2, y0, z1}, {2, y1, z1}, {2, y0, z0}, {2, y1, z1}, {2, y1, z0}};
+    withPortal.computeBounds();
+
+    RenderConfig cfg = envConfig(24);
+    cfg.sky = Vec3(0.6f, 0.7f, 0.9f);
+    cfg.passes = 4;
+    const RenderResult none = render(s, cfg, silentReporter());
+    const RenderResult portal = expectSamePixelsWhateverTheThreadCount(withPortal, cfg);
+    cfg.method = Method::Path;
+    cfg.spp = 1024;
+    cfg.passes = 1;
+    const RenderResult path = render(s, cfg, silentReporter());
+    const double pathsNone = none.stats.count("photon_paths"), pathsPortal = portal.stats.count("photon_paths");
+    RecordProperty("photon_paths_without_portal", std::to_string(pathsNone));
+    RecordProperty("photon_paths_with_portal", std::to_string(pathsPortal));
+    EXPECT_LT(pathsPortal * 4.0, pathsNone);
+    const double ref = layerMean(path.film, kIndirect);
+    RecordProperty("indirect_ratio_without_portal", std::to_string(layerMean(none.film, kIndirect) / ref));
+    RecordProperty("indirect_ratio_with_portal", std::to_string(layerMean(portal.film, kIndirect) / ref));
+    EXPECT_NEAR(layerMean(none.film, kIndirect) / ref, 1.0, 0.04);
+    EXPECT_NEAR(layerMean(portal.film, kIndirect) / ref, 1.0, 0.04);
+    EXPECT_NEAR(layerMean(portal.film, kDirect) / layerMean(path.film, kDirect), 1.0, 0.03);
+}

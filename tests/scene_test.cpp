@@ -495,6 +495,28 @@ TEST(Loader, MatrixAndParentTrsGiveHandComputedWorldVertices) {
     ASSERT_EQ(trianglesOfNode(s, "child").size(), 1u);
 }
 
+// A node whose extras set raysplat_portal (Blender: an object's custom property) is a light
+// portal: its triangles, in world space, go to Scene::portals and not into the geometry; false
+// or 0 leaves the node geometry.
+TEST(Loader, PortalNodesAreNotGeometry) {
+    TempDir dir;
+    GltfBuilder g;
+    int mesh = g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}))});
+    std::string m = std::to_string(mesh);
+    g.node("\"name\":\"wall\",\"mesh\":" + m);
+    g.node("\"name\":\"window\",\"mesh\":" + m + ",\"translation\":[0,0,5],\"extras\":{\"raysplat_portal\":true}");
+    g.node("\"name\":\"door\",\"mesh\":" + m + ",\"translation\":[0,0,7],\"extras\":{\"raysplat_portal\":1}");
+    g.node("\"name\":\"not\",\"mesh\":" + m + ",\"translation\":[0,0,9],\"extras\":{\"raysplat_portal\":false}");
+    Scene s = loadScene(g.write(dir, "portals"), silentReporter());
+    EXPECT_EQ(s.triangleCount(), 2u);
+    EXPECT_EQ(trianglesOfNode(s, "wall").size(), 1u);
+    EXPECT_EQ(trianglesOfNode(s, "not").size(), 1u);
+    ASSERT_EQ(s.portals.size(), 6u);
+    EXPECT_EQ(s.portals[0], Vec3(0, 0, 5));
+    EXPECT_EQ(s.portals[5], Vec3(0, 1, 7));
+    EXPECT_EQ(s.objectNames.size(), 2u);
+}
+
 // Without an indices accessor, vertices 3t..3t+2 form triangle t; a trailing partial triangle is dropped.
 TEST(Loader, NonIndexedPrimitive) {
     TempDir dir;

@@ -86,6 +86,12 @@ void GltfLoader::checkExtensions() {
             fail("required extension '" + e + "' is not supported");
 }
 
+bool GltfLoader::isPortal(const tinygltf::Node& node) {
+    if (!node.extras.IsObject() || !node.extras.Has(kPortalProperty)) return false;
+    const tinygltf::Value& v = node.extras.Get(kPortalProperty);
+    return v.IsBool() ? v.Get<bool>() : v.IsNumber() ? v.GetNumberAsDouble() != 0.0 : false;
+}
+
 void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
     if (index < 0 || index >= int(model_.nodes.size()))
         fail("node " + std::to_string(index) + " does not exist");
@@ -110,7 +116,22 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
     for (int c = 0; c < 4; ++c)
         if (!isFinite(Vec3(world[c])) || !std::isfinite(world[c].w)) fail(where + " has a non-finite transform");
 
-    if (node.mesh >= 0) addMesh(node.mesh, world, where);
+    if (node.mesh >= 0) {
+        if (isPortal(node)) {
+            // A light portal (docs/design.md §7): its triangles leave the scene for scene_.portals.
+            const size_t triangles = scene_.triangleCount(), objects = scene_.objectNames.size();
+            addMesh(node.mesh, world, where);
+            scene_.portals.insert(scene_.portals.end(), scene_.positions.begin() + 3 * triangles, scene_.positions.end());
+            scene_.positions.resize(3 * triangles);
+            scene_.normals.resize(3 * triangles);
+            scene_.uvs.resize(3 * triangles);
+            scene_.triMaterial.resize(triangles);
+            scene_.triObject.resize(triangles);
+            scene_.objectNames.resize(objects);
+        } else {
+            addMesh(node.mesh, world, where);
+        }
+    }
     if (node.camera >= 0) addCamera(node.camera, world, where);
     auto ext = node.extensions.find("KHR_lights_punctual");
     if (ext != node.extensions.end() && ext->second.Has("light")) {

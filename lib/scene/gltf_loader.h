@@ -43,6 +43,10 @@ private:
     void checkExtensions();
     void visitNode(int index, const Mat4& parent, int depth);
     void addCamera(int index, const Mat4& world, const std::string& nodeWhere);
+    // A node whose extras (Blender: the object's custom properties, exported with "Include:
+    // Custom Properties") set raysplat_portal to true or 1 is a light portal, not geometry.
+    static constexpr const char* kPortalProperty = "raysplat_portal";
+    static bool isPortal(const tinygltf::Node& node);
     // -- Materials, textures, KHR_lights_punctual (gltf_materials.cpp)
     void loadMaterials();
     int loadTexture(int textureIndex, const std::string& where);

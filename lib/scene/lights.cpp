@@ -1,7 +1,9 @@
 // Lights chosen in proportion to their luminance power: emissive triangles (Le·π·A, emitting
 // from the front face only), KHR_lights_punctual lights (4π·I for points, the cone integral
 // for spots, E·π·r² over the scene's bounding disc for directional lights) and the
-// environment (∫L dω · π·r²: what it sends through that disc from every direction).
+// environment (∫L dω · π·r²: what it sends through that disc from every direction). With light
+// portals the directional lights and the environment count only what crosses the portals:
+// E·A⊥(d), and ∫L(ω)·A⊥(−ω) dω.
 #include "scene/lights.h"
 
 #include "core/sampling.h"
@@ -12,6 +14,11 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
     sceneCenter_ = scene.bounds.center();
     sceneRadius_ = std::max(0.5f * scene.bounds.diagonal(), 1e-4f);
     entryOfTriangle_.assign(scene.triangleCount(), -1);
+    for (size_t t = 0; t + 2 < scene.portals.size(); t += 3) {
+        const Vec3* v = &scene.portals[t];
+        const Vec3 an = 0.5f * glm::cross(v[1] - v[0], v[2] - v[0]);
+        if (glm::dot(an, an) > 0.f) portals_.push_back({v[0], v[1], v[2], an});
+    }
     for (size_t t = 0; t < scene.triangleCount(); ++t) {
         const Material& m = scene.materials[scene.triMaterial[t]];
         if (!m.isEmissive()) continue;
@@ -22,13 +29,27 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
     }
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PunctualLight& l = scene.lights[i];
-        const float power = l.power(luminance(l.intensity), sceneRadius_);
+        float power = l.power(luminance(l.intensity), sceneRadius_);
+        if (l.type == LightType::Directional && hasPortals() && portalArea(l.direction) > 0.f)
+            power = luminance(l.intensity) * portalArea(l.direction);
         if (power > 0.f) entries_.push_back({Kind::Punctual, uint32_t(i), power});
     }
     if (environment && !environment->black()) {
         environment_ = environment;
         environmentEntry_ = int32_t(entries_.size());
-        entries_.push_back({Kind::Environment, 0, luminance(environment->integral()) * kPi * sqr(sceneRadius_)});
+        float power = luminance(environment->integral()) * kPi * sqr(sceneRadius_);
+        if (hasPortals()) {
+            // ∫L(ω)·A⊥(−ω) dω, by the sampling density: stratified directions, L/pdf · A⊥.
+            double sum = 0.0;
+            const int n = 4096;
+            for (int i = 0; i < n; ++i) {
+                float pdf;
+                const Vec3 w = environment->sample(sobol2D(uint32_t(i), 0x5eed), pdf);
+                if (pdf > 0.f) sum += double(luminance(environment->radiance(w))) / pdf * portalArea(w);
+            }
+            power = float(sum / n);
+        }
+        entries_.push_back({Kind::Environment, 0, power});
     }
     double total = 0.0;
     for (const Entry& e : entries_) total += e.power;
@@ -45,6 +66,38 @@ size_t LightSampler::choose(float u, float& prob) const {
     i = std::min(i, cdf_.size() - 1);
     prob = probability(i);
     return i;
+}
+
+float LightSampler::portalArea(const Vec3& d) const {
+    float a = 0.f;
+    for (const PortalTriangle& p : portals_) a += std::abs(glm::dot(p.areaNormal, d));
+    return a;
+}
+
+bool LightSampler::throughPortal(const Vec3& d, Vec2 u, EmissionSample& s, float& area) const {
+    area = portalArea(d);
+    if (!(area > 0.f)) return false;
+    // The triangle by its projected area; u.x rescaled within its share places the point.
+    const float target = u.x * area;
+    float acc = 0.f, share = 0.f;
+    size_t t = 0;
+    for (; t < portals_.size(); ++t) {
+        share = std::abs(glm::dot(portals_[t].areaNormal, d));
+        if (target < acc + share || t + 1 == portals_.size()) break;
+        acc += share;
+    }
+    const float within = share > 0.f ? std::clamp((target - acc) / share, 0.f, 0x1.fffffep-1f) : 0.5f;
+    const PortalTriangle& p = portals_[t];
+    const Vec2 b = sampleUniformTriangle(Vec2(within, u.y));
+    const Vec3 y = (1.f - b.x - b.y) * p.v0 + b.x * p.v1 + b.y * p.v2;
+    // Back along −d to where the line leaves the bounding sphere (a little beyond it).
+    const Vec3 c = y - sceneCenter_;
+    const float vd = glm::dot(c, d), r = 1.001f * sceneRadius_;
+    const float back = vd + std::sqrt(std::max(0.f, vd * vd - (glm::dot(c, c) - r * r)));
+    s.origin = y - back * d;
+    s.dir = d;
+    s.collimated = true;
+    return true;
 }
 
 float LightSampler::pdfEnvironment(const Vec3& dir) const {
@@ -131,6 +184,14 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
         float pdfDir;
         const Vec3 wi = environment_->sample(uDir, pdfDir);
         if (!(pdfDir > 0.f)) return s;
+        if (hasPortals()) {
+            // Through the portals: L·A⊥ / (pdf(ω)·pChoice); none facing ω: no photon.
+            float area;
+            if (!throughPortal(-wi, uPos, s, area)) return s;
+            s.pdfChoicePos = prob / area;
+            s.flux = environment_->radiance(wi) * (area / (pdfDir * prob));
+            return s;
+        }
         Frame f(-wi);
         Vec2 d = sampleUniformDisk(uPos) * sceneRadius_;
         s.origin = sceneCenter_ + sceneRadius_ * wi + d.x * f.s + d.y * f.t;
@@ -173,6 +234,12 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
             break;
         }
         case LightType::Directional: {
+            float area;
+            if (hasPortals() && throughPortal(l.direction, uPos, s, area)) {
+                s.pdfChoicePos = prob / area;
+                s.flux = l.intensity * (area / prob);
+                break;
+            }
             // A disc of the scene's bounding radius, perpendicular to the light, outside the scene.
             Frame f(l.direction);
             Vec2 d = sampleUniformDisk(uPos) * sceneRadius_;

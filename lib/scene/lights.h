@@ -47,7 +47,10 @@ public:
     // Solid-angle pdf that sampleLi from `p` picks point `pl` on emissive triangle `tri`.
     float pdfLi(const Vec3& p, uint32_t tri, const Vec3& pl) const;
     // A photon leaving a light: 1 number picks the light, 2 the position, 2 the direction.
+    // With light portals (Scene::portals), photons of directional lights and of the environment
+    // cross a portal: a point on them chosen by area projected across the photon's direction.
     EmissionSample sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const;
+    bool hasPortals() const { return !portals_.empty(); }
 
 private:
     enum class Kind : uint8_t { Area, Punctual, Environment };
@@ -58,12 +61,22 @@ private:
     };
     float probability(size_t entry) const { return cdf_[entry] - (entry ? cdf_[entry - 1] : 0.f); }
     size_t choose(float u, float& prob) const;
+    // Σ A·|n·d| over the portal triangles: their area seen along d.
+    float portalArea(const Vec3& d) const;
+    // A photon along d through a point of the portals chosen by projected area (u), starting
+    // where the line leaves the scene's bounding sphere backwards; false when no portal faces d.
+    bool throughPortal(const Vec3& d, Vec2 u, EmissionSample& s, float& area) const;
 
     const Scene& scene_;
     std::vector<Entry> entries_;
     std::vector<float> cdf_;              // normalised, cdf_.back() == 1
     std::vector<int32_t> entryOfTriangle_;  // -1 for non-emissive triangles
     const Environment* environment_ = nullptr;
+    struct PortalTriangle {
+        Vec3 v0, v1, v2;
+        Vec3 areaNormal;  // area × unit normal
+    };
+    std::vector<PortalTriangle> portals_;  // those with area
     int32_t environmentEntry_ = -1;
     Vec3 sceneCenter_;
     float sceneRadius_ = 1.f;

@@ -92,6 +92,7 @@ Vec3 Scene::emittedPower() const {
 void Scene::computeBounds() {
     bounds = Bounds3();
     for (const Vec3& p : positions) bounds.extend(p);
+    for (const Vec3& p : portals) bounds.extend(p);
 }
 
 }  // namespace rs

@@ -85,6 +85,10 @@ struct Scene {
     std::vector<Material> materials;
     std::vector<Texture> textures;
     std::vector<PunctualLight> lights;
+    // Light portals (docs/design.md §7): the openings through which the sun and the sky light the
+    // interior, 3 positions a triangle. Not geometry: nothing hits them. Photons from
+    // directional lights and the environment are sent through them when there are any.
+    std::vector<Vec3> portals;
     std::vector<Camera> cameras;  // every perspective camera of the file, in node order
     Bounds3 bounds;
 
