@@ -239,6 +239,7 @@ int cmdInfo(int argc, char** argv) {
     std::string lk = fmt("%zu emissive triangles", emissiveTris);
     for (auto& [k, n] : lightTypes) lk += fmt(", %d %s", n, k.c_str());
     std::printf("lights      %s\n", lk.c_str());
+    if (!s.portals.empty()) std::printf("portals     %zu triangles (sun and sky photons enter through them)\n", s.portals.size() / 3);
     Vec3 power = s.emittedPower();
     std::printf("power       %.4g W (RGB %.4g, %.4g, %.4g)\n", luminance(power), power.x, power.y, power.z);
     Camera c = s.camera();
