@@ -646,6 +646,44 @@ TEST(Loader, OnlyPointsIsAnErrorNamingTheFile) {
 // A baseColorTexture whose image file is 0 bytes: tinygltf warns and leaves the image empty; the
 // load fails with one Error naming the file and "image 0", and the failed load reports no
 // warnings of its own (the CLI prints exactly one line).
+// alphaMode and alphaCutoff, the base colour factor's alpha, and a texture's alpha channel (a
+// 2 × 1 TGA, alpha 255 and 0, which the image decoder reads like a PNG): solidAt cuts the
+// surface where factor × texel alpha < cutoff (MASK) and keeps it with probability alpha (BLEND).
+TEST(Loader, AlphaModesAndTextureAlpha) {
+    TempDir dir;
+    GltfBuilder g;
+    int leaf = g.material("{\"name\":\"leaf\",\"alphaMode\":\"MASK\",\"alphaCutoff\":0.3,"
+                          "\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.5],\"baseColorTexture\":{\"index\":0}}}");
+    int glass = g.material("{\"name\":\"veil\",\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.25]}}");
+    int positions = g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    g.node("\"name\":\"leaf\",\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(positions, -1, kTriangles, leaf)})));
+    g.node("\"name\":\"veil\",\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(positions, -1, kTriangles, glass)})));
+    g.extra("\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"alpha.tga\"}]");
+    std::string tga(18, '\0');
+    tga[2] = 2;                        // uncompressed true colour
+    tga[12] = 2, tga[14] = 1;          // 2 × 1
+    tga[16] = 32, tga[17] = 0x28;      // 32 bits, 8 of alpha, top-left origin
+    tga += std::string("\xff\xff\xff\xff\xff\xff\xff\x00", 8);  // BGRA: opaque, then transparent
+    writeFile(dir.file("alpha.tga"), tga);
+    Scene s = loadScene(g.write(dir, "alpha"), silentReporter());
+    ASSERT_EQ(s.textures.size(), 1u);
+    ASSERT_EQ(s.textures[0].alpha.size(), 2u);
+    EXPECT_EQ(s.textures[0].alpha[0], 1.f);
+    EXPECT_EQ(s.textures[0].alpha[1], 0.f);
+    const Material& m = s.materials[size_t(leaf)];
+    EXPECT_EQ(m.alphaMode, AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(m.alphaCutoff, 0.3f);
+    EXPECT_FLOAT_EQ(m.opacity, 0.5f);
+    EXPECT_EQ(s.materials[size_t(glass)].alphaMode, AlphaMode::Blend);
+    EXPECT_TRUE(s.hasCutouts());
+    // Triangle 0 (the leaf) has uvs (0, 0): texel 0, alpha 0.5 ≥ 0.3. Move them onto texel 1.
+    EXPECT_TRUE(s.solidAt(0, 0.2f, 0.2f, 0.9f));
+    for (int k = 0; k < 3; ++k) s.uvs[k] = Vec2(0.75f, 0.5f);
+    EXPECT_FALSE(s.solidAt(0, 0.2f, 0.2f, 0.f));
+    EXPECT_TRUE(s.solidAt(1, 0.2f, 0.2f, 0.2f));   // BLEND, alpha 0.25
+    EXPECT_FALSE(s.solidAt(1, 0.2f, 0.2f, 0.3f));
+}
+
 TEST(Loader, EmptyTextureImageIsOneErrorNamingTheImage) {
     TempDir dir;
     GltfBuilder g;

@@ -3,7 +3,8 @@
 //
 // Hashed, in order: a tag, kVdbFormatVersion, the resolution, the voxelizer kind and its
 // supersampling, the triangle count, then the bit patterns of every triangle position (the
-// grid geometry follows from them and the resolution). MurmurHash3-style mixing of 64-bit
+// grid geometry follows from them and the resolution), and for cut-out surfaces their alpha
+// settings, texture alpha and uvs. MurmurHash3-style mixing of 64-bit
 // words with its fmix64 finaliser: not cryptographic, but any change of a vertex bit, of
 // the resolution or of the voxelizer settings gives another key with overwhelming odds.
 #include <cstdio>
@@ -71,6 +72,29 @@ std::string cacheKey(const Scene& scene, int resolution, VoxelizerKind kind) {
         std::memcpy(&a, f + i, 4);
         if (i + 1 < n) std::memcpy(&b, f + i + 1, 4);
         h.add(uint64_t(a) | (uint64_t(b) << 32));
+    }
+    // Cut-out surfaces (alphaMode MASK, BLEND) decide coverage too: each cut-out material's
+    // alpha settings and texture alpha, then each cut-out triangle's material and uvs.
+    auto bitsOf = [](float x) {
+        uint32_t b;
+        std::memcpy(&b, &x, 4);
+        return uint64_t(b);
+    };
+    if (scene.hasCutouts()) {
+        for (const Material& m : scene.materials) {
+            if (m.alphaMode == AlphaMode::Opaque) continue;
+            h.add(uint64_t(m.alphaMode) << 32 | uint64_t(uint32_t(m.baseColorTexture)));
+            h.add(bitsOf(m.opacity) | bitsOf(m.alphaCutoff) << 32);
+            if (m.baseColorTexture < 0) continue;
+            const Texture& tex = scene.textures[size_t(m.baseColorTexture)];
+            h.add(uint64_t(uint32_t(tex.width)) << 32 | uint64_t(uint32_t(tex.height)));
+            for (float a : tex.alpha) h.add(bitsOf(a));
+        }
+        for (size_t t = 0; t < scene.triangleCount(); ++t) {
+            if (scene.materials[scene.triMaterial[t]].alphaMode == AlphaMode::Opaque) continue;
+            h.add(uint64_t(t) << 32 | scene.triMaterial[t]);
+            for (int k = 0; k < 3; ++k) h.add(bitsOf(scene.uvs[3 * t + k].x) | bitsOf(scene.uvs[3 * t + k].y) << 32);
+        }
     }
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", (unsigned long long)h.finish());

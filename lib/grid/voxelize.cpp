@@ -53,7 +53,9 @@ int ceilPowerOfTwo(int x) {
 
 struct GlObjects {
     GLuint vao = 0, vertices = 0, planes = 0, slices = 0, indices = 0, texture = 0, framebuffer = 0;
+    GLuint cutout[4] = {0, 0, 0, 0};  // cutout, cutoutPlanes, cutoutInfo, levels: bindings 2–5
     ~GlObjects() {
+        glDeleteBuffers(4, cutout);
         glDeleteFramebuffers(1, &framebuffer);
         glDeleteTextures(1, &texture);
         glDeleteBuffers(1, &indices);
@@ -138,6 +140,17 @@ void uploadTriangles(const VoxelTriangles& tris, const TriangleLists& lists, GlO
     }
     if (!lists.indices.empty())
         glNamedBufferStorage(gl.indices, GLsizeiptr(lists.indices.size() * sizeof(uint32_t)), lists.indices.data(), 0);
+    // The cut-out buffers, each at least one word (a storage block may not be empty).
+    glCreateBuffers(4, gl.cutout);
+    const uint32_t none = 0;
+    auto store = [&](GLuint buffer, const void* data, size_t bytes) {
+        glNamedBufferStorage(buffer, GLsizeiptr(bytes ? bytes : sizeof none), bytes ? data : &none, 0);
+    };
+    store(gl.cutout[0], tris.cutout.data(), tris.cutout.size() * sizeof(uint32_t));
+    store(gl.cutout[1], tris.cutoutPlanes.data(), tris.cutoutPlanes.size() * sizeof(Vec4));
+    store(gl.cutout[2], tris.cutoutInfo.data(), tris.cutoutInfo.size() * sizeof(glm::uvec4));
+    store(gl.cutout[3], tris.levels.data(), tris.levels.size() * sizeof(uint32_t));
+    for (int b = 0; b < 4; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, GLuint(2 + b), gl.cutout[b]);
     glVertexArrayElementBuffer(gl.vao, gl.indices);
     glVertexArrayVertexBuffer(gl.vao, 0, gl.vertices, 0, sizeof(Vec3));
     glVertexArrayAttribFormat(gl.vao, 0, 3, GL_FLOAT, GL_FALSE, 0);

@@ -12,6 +12,8 @@
 // sub-samples (0…16).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -58,12 +60,54 @@ constexpr int kMaxSlicesPerPass = 64;  // bits of one RG (or BA) mask
 // floor of the highest vertex coordinate along a): the plane's slice is clamped to it, so
 // float rounding on steep triangles never puts a hit outside the triangle's own extent, and
 // the GPU can skip a triangle in the intervals it does not reach.
+//
+// Cut-out surfaces (alphaMode MASK or BLEND, docs/design.md §3) cover a sub-sample where their
+// texel there is solid: cutout[t] indexes triangle t's cut-out data, or is kSolid. For axis a,
+// cutoutPlanes[6c + 2a] and [6c + 2a + 1] give the texture's u and v over the projection plane
+// as the planes give depth, (c0, cu, cv, 0), evaluated in the same float operations; the texel
+// is (⌊fract(u)·W⌋, ⌊fract(v)·H⌋) of cutoutInfo[c] = (first level, W, H, 0), and its level
+// (0…255: MASK 255 where factor × texel alpha ≥ cutoff, else 0; BLEND round(255·alpha)) is
+// compared with a hash of the sub-sample, the axis and the triangle (cutoutHash): covered when
+// hash mod 255 < level. Integer operations throughout, the same in glsl/voxelize.frag.
 struct VoxelTriangles {
+    static constexpr uint32_t kSolid = 0xffffffffu;
     std::vector<Vec3> positions;    // 3 per triangle, voxel space, snapped
     std::vector<Vec4> planes;       // 3 per triangle
     std::vector<IVec2> slices;      // 3 per triangle
+    std::vector<uint32_t> cutout;       // per triangle
+    std::vector<Vec4> cutoutPlanes;     // 6 per cut-out triangle
+    std::vector<glm::uvec4> cutoutInfo; // per cut-out triangle
+    std::vector<uint32_t> levels;       // texel levels of every cut-out material
     size_t count() const { return positions.size() / 3; }
 };
+
+inline uint32_t cutoutHash(uint32_t px, uint32_t py, uint32_t axis, uint32_t tri) {
+    uint32_t h = px * 0x8da6b343u ^ py * 0xd8163841u ^ (tri * 3u + axis) * 0xcb1ab31fu;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    h *= 0x297a2d39u;
+    h ^= h >> 15;
+    return h;
+}
+
+// Whether cut-out triangle c covers sub-sample (px, py) at voxel-space (uCoord, vCoord) of axis a.
+inline bool cutoutCovers(const VoxelTriangles& tris, uint32_t c, uint32_t tri, int a, float uCoord, float vCoord,
+                         uint32_t px, uint32_t py) {
+    float tex[2];
+    for (int k = 0; k < 2; ++k) {
+        const Vec4 p = tris.cutoutPlanes[6 * c + 2 * a + k];
+        float t = p.y * uCoord;  // the order of glsl/voxelize.frag, no fused multiply-add
+        float s = p.x + t;
+        float r = p.z * vCoord;
+        tex[k] = s + r;
+    }
+    const glm::uvec4 info = tris.cutoutInfo[c];
+    const float fx = tex[0] - std::floor(tex[0]), fy = tex[1] - std::floor(tex[1]);
+    const uint32_t x = std::min(uint32_t(fx * float(info.y)), info.y - 1u);
+    const uint32_t y = std::min(uint32_t(fy * float(info.z)), info.z - 1u);
+    return cutoutHash(px, py, uint32_t(a), tri) % 255u < tris.levels[info.x + y * info.y + x];
+}
 VoxelTriangles prepareVoxelTriangles(const Scene& scene, const GridGeometry& grid);
 
 // Throws Error(Config) with a memory estimate when the grid's OcclusionGrid would exceed

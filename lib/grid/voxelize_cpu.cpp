@@ -31,6 +31,65 @@ void checkGridSize(const GridGeometry& grid) {
     }
 }
 
+namespace {
+
+// The texel levels of cut-out material m (VoxelTriangles): one per texel of its base colour
+// texture, or one for the whole surface without a texture alpha.
+std::vector<uint32_t> cutoutLevels(const Scene& scene, uint32_t m, int& width, int& height) {
+    const Material& mat = scene.materials[m];
+    const Texture* tex = mat.baseColorTexture >= 0 ? &scene.textures[size_t(mat.baseColorTexture)] : nullptr;
+    if (tex && tex->alpha.empty()) tex = nullptr;
+    width = tex ? tex->width : 1;
+    height = tex ? tex->height : 1;
+    std::vector<uint32_t> levels(size_t(width) * height);
+    for (size_t i = 0; i < levels.size(); ++i) {
+        const float alpha = mat.opacity * (tex ? tex->alpha[i] : 1.f);
+        levels[i] = mat.alphaMode == AlphaMode::Mask ? (alpha >= mat.alphaCutoff ? 255u : 0u)
+                                                     : uint32_t(std::lround(std::clamp(alpha, 0.f, 1.f) * 255.f));
+    }
+    return levels;
+}
+
+// The cut-out data of VoxelTriangles: texture planes from the snapped positions and the uvs.
+void prepareCutouts(const Scene& scene, VoxelTriangles& out) {
+    const size_t n = scene.triangleCount();
+    out.cutout.assign(n, VoxelTriangles::kSolid);
+    std::vector<glm::uvec4> infoOfMaterial(scene.materials.size(), glm::uvec4(0));
+    for (uint32_t m = 0; m < scene.materials.size(); ++m) {
+        if (scene.materials[m].alphaMode == AlphaMode::Opaque) continue;
+        int w, h;
+        const std::vector<uint32_t> levels = cutoutLevels(scene, m, w, h);
+        infoOfMaterial[m] = glm::uvec4(uint32_t(out.levels.size()), uint32_t(w), uint32_t(h), 0u);
+        out.levels.insert(out.levels.end(), levels.begin(), levels.end());
+    }
+    for (size_t t = 0; t < n; ++t) {
+        const uint32_t m = scene.triMaterial[t];
+        if (scene.materials[m].alphaMode == AlphaMode::Opaque) continue;
+        out.cutout[t] = uint32_t(out.cutoutInfo.size());
+        out.cutoutInfo.push_back(infoOfMaterial[m]);
+        DVec3 p[3];
+        for (int i = 0; i < 3; ++i) p[i] = DVec3(out.positions[3 * t + i]);
+        for (int a = 0; a < 3; ++a) {
+            const int u = (a + 1) % 3, v = (a + 2) % 3;
+            // Solve c0 + cu·p[i][u] + cv·p[i][v] = uv_i for the three vertices (Cramer's rule).
+            const double det = (p[1][u] - p[0][u]) * (p[2][v] - p[0][v]) - (p[2][u] - p[0][u]) * (p[1][v] - p[0][v]);
+            for (int k = 0; k < 2; ++k) {
+                if (det == 0.0) {
+                    out.cutoutPlanes.push_back(Vec4(0.f));
+                    continue;
+                }
+                const double f0 = scene.uvs[3 * t][k], f1 = scene.uvs[3 * t + 1][k], f2 = scene.uvs[3 * t + 2][k];
+                const double cu = ((f1 - f0) * (p[2][v] - p[0][v]) - (f2 - f0) * (p[1][v] - p[0][v])) / det;
+                const double cv = ((p[1][u] - p[0][u]) * (f2 - f0) - (p[2][u] - p[0][u]) * (f1 - f0)) / det;
+                const double c0 = f0 - cu * p[0][u] - cv * p[0][v];
+                out.cutoutPlanes.push_back(Vec4(float(c0), float(cu), float(cv), 0.f));
+            }
+        }
+    }
+}
+
+}  // namespace
+
 VoxelTriangles prepareVoxelTriangles(const Scene& scene, const GridGeometry& grid) {
     VoxelTriangles out;
     size_t n = scene.triangleCount();
@@ -61,6 +120,7 @@ VoxelTriangles prepareVoxelTriangles(const Scene& scene, const GridGeometry& gri
             out.planes[3 * t + a] = Vec4(float(c0), float(cu), float(cv), normal[a] > 0 ? 1.f : -1.f);
         }
     }
+    prepareCutouts(scene, out);
     return out;
 }
 
@@ -151,7 +211,10 @@ void voxelizeRow(const VoxelTriangles& tris, const AxisJob& job, int j, std::vec
                     float r = plane.z * vCoord;
                     float depth = s + r;
                     float slice = std::min(std::max(std::floor(depth), range.x), range.y);
-                    if (slice >= 0.f && slice < float(job.dims[job.a])) {
+                    const uint32_t c = tris.cutout[t];
+                    if (slice >= 0.f && slice < float(job.dims[job.a]) &&
+                        (c == VoxelTriangles::kSolid ||
+                         cutoutCovers(tris, c, t, job.a, uCoord, vCoord, uint32_t(px), uint32_t(py)))) {
                         int bit = int(slice);
                         mask[(size_t((py - py0) * width + px)) * job.words + bit / 64] |= uint64_t(1) << (bit % 64);
                     }

@@ -4,10 +4,12 @@
 
 #include <embree3/rtcore.h>
 
+#include <cstring>
 #include <mutex>
 #include <string>
 
 #include "core/error.h"
+#include "core/sampling.h"
 
 namespace rs {
 
@@ -36,6 +38,31 @@ static void onEmbreeError(void* user, RTCError code, const char* message) {
         impl->firstError = std::string(message ? message : "error") + " (code " + std::to_string(int(code)) + ")";
 }
 
+// Cut-out surfaces (alphaMode MASK or BLEND): every query, single rays and packets, closest
+// hit and occlusion, skips the hits where the surface is not there. BLEND's random number is
+// a hash of the ray and the triangle: the same ray always makes the same choice.
+static void alphaFilter(const RTCFilterFunctionNArguments* args) {
+    const auto* scene = static_cast<const Scene*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        const uint32_t tri = RTCHitN_primID(args->hit, args->N, i);
+        const float b1 = RTCHitN_u(args->hit, args->N, i), b2 = RTCHitN_v(args->hit, args->N, i);
+        float u = 0.f;
+        if (scene->materials[scene->triMaterial[tri]].alphaMode == AlphaMode::Blend) {
+            uint64_t h = tri;
+            for (float f : {RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                            RTCRayN_org_z(args->ray, args->N, i), RTCRayN_dir_x(args->ray, args->N, i),
+                            RTCRayN_dir_y(args->ray, args->N, i), RTCRayN_dir_z(args->ray, args->N, i)}) {
+                uint32_t bits;
+                std::memcpy(&bits, &f, sizeof bits);
+                h = mix64(h ^ bits);
+            }
+            u = toUnitFloat(uint32_t(h >> 32));
+        }
+        if (!scene->solidAt(tri, b1, b2, u)) args->valid[i] = 0;
+    }
+}
+
 RayAccel::RayAccel(const Scene& scene, int threads) : impl_(std::make_unique<Impl>()), scene_(scene) {
     std::string cfg = "threads=" + std::to_string(std::max(threads, 1)) + ",user_threads=0";
     impl_->device = rtcNewDevice(cfg.c_str());
@@ -58,6 +85,11 @@ RayAccel::RayAccel(const Scene& scene, int threads) : impl_(std::make_unique<Imp
         v[3 * i + 1] = scene.positions[i].y;
         v[3 * i + 2] = scene.positions[i].z;
         idx[i] = uint32_t(i);
+    }
+    if (scene.hasCutouts()) {
+        rtcSetGeometryUserData(geom, const_cast<Scene*>(&scene));
+        rtcSetGeometryIntersectFilterFunction(geom, alphaFilter);
+        rtcSetGeometryOccludedFilterFunction(geom, alphaFilter);
     }
     rtcCommitGeometry(geom);
     rtcAttachGeometry(impl_->scene, geom);

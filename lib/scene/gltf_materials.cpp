@@ -42,6 +42,13 @@ void GltfLoader::loadMaterials() {
         if (glm::any(glm::lessThan(out.emission, Vec3(0.f)))) fail(where + " has negative emission");
         if (pbr.baseColorTexture.index >= 0)
             out.baseColorTexture = loadTexture(pbr.baseColorTexture.index, where);
+        out.opacity = std::clamp(float(pbr.baseColorFactor.at(3)), 0.f, 1.f);
+        out.alphaCutoff = float(m.alphaCutoff);
+        if (m.alphaMode == "MASK") out.alphaMode = AlphaMode::Mask;
+        else if (m.alphaMode == "BLEND") out.alphaMode = AlphaMode::Blend;
+        else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty()) fail(where + " has unknown alphaMode '" + m.alphaMode + "'");
+        if (!std::isfinite(out.opacity) || !std::isfinite(out.alphaCutoff) || out.alphaCutoff < 0.f)
+            fail(where + " has a non-finite alpha or a negative alphaCutoff");
         if (m.emissiveTexture.index >= 0)
             warn("materials with an emissiveTexture (ignored)", where + ": emissiveTexture is ignored (emissiveFactor used)");
 
@@ -85,6 +92,8 @@ int GltfLoader::loadTexture(int textureIndex, const std::string& where) {
     tex.width = img.width;
     tex.height = img.height;
     tex.texels.resize(size_t(img.width) * img.height);
+    const bool hasAlpha = img.component == 2 || img.component == 4;
+    if (hasAlpha) tex.alpha.resize(tex.texels.size());
     float maxValue = img.bits == 8 ? 255.f : 65535.f;
     for (size_t p = 0; p < tex.texels.size(); ++p) {
         float ch[4];
@@ -95,6 +104,7 @@ int GltfLoader::loadTexture(int textureIndex, const std::string& where) {
         }
         Vec3 rgb = img.component >= 3 ? Vec3(ch[0], ch[1], ch[2]) : Vec3(ch[0]);
         tex.texels[p] = Vec3(srgbToLinear(rgb.x), srgbToLinear(rgb.y), srgbToLinear(rgb.z));
+        if (hasAlpha) tex.alpha[p] = ch[img.component - 1];  // alpha is linear
     }
     int index = int(scene_.textures.size());
     scene_.textures.push_back(std::move(tex));

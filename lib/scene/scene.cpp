@@ -38,6 +38,12 @@ Vec3 Texture::sample(Vec2 uv) const {
            fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
+int Texture::texelAt(Vec2 uv) const {
+    const float fx = uv.x - std::floor(uv.x), fy = uv.y - std::floor(uv.y);
+    const int x = std::min(int(fx * float(width)), width - 1), y = std::min(int(fy * float(height)), height - 1);
+    return y * width + x;
+}
+
 Vec3 PunctualLight::intensityTowards(const Vec3& w) const {
     if (type != LightType::Spot) return intensity;
     float c = glm::dot(w, direction);
@@ -61,6 +67,27 @@ Vec3 Scene::albedo(uint32_t material, Vec2 uv) const {
     const Material& m = materials[material];
     if (m.baseColorTexture < 0) return m.baseColor;
     return m.baseColor * textures[m.baseColorTexture].sample(uv);
+}
+
+float Scene::alphaAt(uint32_t material, Vec2 uv) const {
+    const Material& m = materials[material];
+    if (m.baseColorTexture < 0) return m.opacity;
+    const Texture& t = textures[m.baseColorTexture];
+    return t.alpha.empty() ? m.opacity : m.opacity * t.alpha[size_t(t.texelAt(uv))];
+}
+
+bool Scene::hasCutouts() const {
+    for (const Material& m : materials)
+        if (m.alphaMode != AlphaMode::Opaque) return true;
+    return false;
+}
+
+bool Scene::solidAt(uint32_t tri, float b1, float b2, float u) const {
+    const Material& m = materials[triMaterial[tri]];
+    if (m.alphaMode == AlphaMode::Opaque) return true;
+    const Vec2 uv = (1.f - b1 - b2) * uvs[3 * tri] + b1 * uvs[3 * tri + 1] + b2 * uvs[3 * tri + 2];
+    const float a = alphaAt(triMaterial[tri], uv);
+    return m.alphaMode == AlphaMode::Mask ? a >= m.alphaCutoff : u < a;
 }
 
 Camera Scene::camera(const std::string& name) const {

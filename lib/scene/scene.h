@@ -14,6 +14,11 @@ namespace rs {
 enum class MaterialKind { Lambert, Glossy, Mix, Glass, Mirror };
 const char* materialKindName(MaterialKind kind);
 
+// glTF's alphaMode: OPAQUE ignores alpha; MASK cuts the surface away where alpha < alphaCutoff;
+// BLEND keeps it with probability alpha (stochastic transparency: each ray decides by a hash
+// of itself, so a render stays deterministic).
+enum class AlphaMode { Opaque, Mask, Blend };
+
 struct Material {
     std::string name;
     MaterialKind kind = MaterialKind::Lambert;
@@ -23,6 +28,9 @@ struct Material {
     float ior = 1.5f;
     int baseColorTexture = -1;  // index into Scene::textures, or -1
     Vec3 emission{0.f};         // radiance of the front face, W/(m²·sr)
+    AlphaMode alphaMode = AlphaMode::Opaque;
+    float opacity = 1.f;        // baseColorFactor's alpha
+    float alphaCutoff = 0.5f;   // MASK
 
     bool isEmissive() const { return !isBlack(emission); }
     bool isSpecular() const { return kind == MaterialKind::Glass || kind == MaterialKind::Mirror; }
@@ -33,8 +41,12 @@ struct Texture {
     std::string name;
     int width = 0, height = 0;
     std::vector<Vec3> texels;  // linear RGB (sRGB decoded), row 0 at v = 0
+    std::vector<float> alpha;  // per texel, linear; empty: the image has no alpha
 
     Vec3 sample(Vec2 uv) const;  // bilinear, repeat
+    // The texel holding uv (repeat): the alpha test reads texels, not a filtered value, so that
+    // both voxelizers and the ray tracer cut a surface along the same texel edges.
+    int texelAt(Vec2 uv) const;
 };
 
 enum class LightType { Point, Spot, Directional };
@@ -97,6 +109,13 @@ struct Scene {
     float triangleArea(size_t tri) const;
     // Base colour at a surface point: factor × texture.
     Vec3 albedo(uint32_t material, Vec2 uv) const;
+    // Alpha at a surface point: factor × the texel's alpha.
+    float alphaAt(uint32_t material, Vec2 uv) const;
+    // Whether any material cuts its surface (alphaMode MASK or BLEND).
+    bool hasCutouts() const;
+    // Whether triangle `tri` is there at barycentrics (b1, b2) for a ray whose own random number
+    // is u in [0, 1): MASK compares alpha with the cutoff, BLEND with u.
+    bool solidAt(uint32_t tri, float b1, float b2, float u) const;
     // The camera to render: the named one, or the first, or one framing the bounds.
     Camera camera(const std::string& name = "") const;
     // Total flux emitted by area and punctual lights, W (directional lights count over the
