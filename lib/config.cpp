@@ -111,9 +111,12 @@ void RenderConfig::validate() const {
     if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
 }
 
-Environment RenderConfig::environment() const {
+Environment RenderConfig::environment(const Scene& scene) const {
     if (!env.empty()) return loadEnvironment(env, envStrength, envRotation * kPi / 180.f);
-    return Environment::uniform(sky);
+    if (!isBlack(sky)) return Environment::uniform(sky);
+    const Scene::EnvironmentSettings& own = scene.environment;
+    if (!own.file.empty()) return loadEnvironment(own.file, own.strength, own.rotation * kPi / 180.f);
+    return Environment::uniform(own.sky);
 }
 
 void RenderConfig::validateGrid() const {

@@ -75,7 +75,9 @@ struct RenderConfig {
     float envStrength = 1.f;
     float envRotation = 0.f;
     Vec3 sky{0.f};
-    Environment environment() const;  // loads `env`; throws Error naming the file
+    // The render's environment: `env` or `sky` where given, else the scene's own
+    // (Scene::environment). Loads the image; throws Error naming the file.
+    Environment environment(const Scene& scene) const;
 
     // Photons (docs/design.md §7): total M, the split direct/indirect/caustic, the photons wanted
     // under a kernel (k) and the radius clamps in voxels, per class.

@@ -298,7 +298,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     // Ray-tracing acceleration structure and the lights.
     Timer t;
     RayAccel accel(scene, pool.size());
-    const Environment environment = cfg.environment();
+    const Environment environment = cfg.environment(scene);
     LightSampler lights(scene, &environment);
     stats.addTime("bvh", t.seconds());
     if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights and no environment: the image will be black");

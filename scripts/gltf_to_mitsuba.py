@@ -20,13 +20,21 @@ the rules of docs/design.md §3 so that both renderers see the same scene:
   KHR_lights_punctual point / spot       point / spot, intensity in W/sr
   KHR_lights_punctual directional        directional, irradiance in W/m²
   perspective camera                     perspective, fov_axis y, box pixel filter
+  baseColorTexture (diffuse materials)   bitmap reflectance, bilinear, sRGB decoded
+  alphaMode MASK / BLEND                 mask BSDF whose opacity is the texel's level
+                                         (MASK: 0 or 1 by alphaCutoff; BLEND: alpha),
+                                         nearest texel, as raysplat's alpha test
+  scene extras raysplat_sky              constant emitter
+  scene extras raysplat_env (+ strength, envmap, scale = strength, turned about +Y by
+    rotation)                            90° − rotation (Blender's orientation)
+  node extras raysplat_portal            left out (a portal is not geometry)
 
 Known differences of material model (they matter only where such materials are seen):
 the principled BSDF uses the separable Smith masking term where raysplat uses the
 height-correlated one, and its diffuse lobe for the mix is Disney's, not Lambert's;
 Mitsuba's conductor "none" reflects a constant F0 where raysplat's mirror uses Schlick.
-Textures are not converted (the scenes of data/ have none): a textured material keeps its
-factor and the converter says so.
+A base colour texture is converted for diffuse materials whose factor is white; other
+textured materials keep their factor and the converter says so.
 """
 
 import argparse
@@ -167,13 +175,41 @@ def rgb(values):
     return ", ".join(f"{v:.9g}" for v in values[:3])
 
 
-def material_xml(mat, name):
-    """(bsdf XML, emitter XML or '') for a glTF material following docs/design.md §3."""
+def image_of_texture(doc, buffers, texture, scene_path):
+    """The decoded RGBA image (H × W × 4, uint8) of glTF texture `texture`."""
+    from io import BytesIO
+    from PIL import Image
+
+    image = doc["images"][doc["textures"][texture]["source"]]
+    if "bufferView" in image:
+        view = doc["bufferViews"][image["bufferView"]]
+        start = view.get("byteOffset", 0)
+        data = bytes(buffers[view["buffer"]][start:start + view["byteLength"]])
+    elif image.get("uri", "").startswith("data:"):
+        data = base64.b64decode(image["uri"].split(",", 1)[1])
+    else:
+        from urllib.parse import unquote
+        with open(os.path.join(os.path.dirname(scene_path), unquote(image["uri"])), "rb") as f:
+            data = f.read()
+    return np.array(Image.open(BytesIO(data)).convert("RGBA"))
+
+
+def write_png(path, pixels):
+    from PIL import Image
+
+    Image.fromarray(pixels).save(path)
+
+
+def material_xml(mat, name, texture_file=None, opacity_file=None):
+    """(bsdf XML, emitter XML or '') for a glTF material following docs/design.md §3.
+    texture_file: the base colour texture as a PNG, opacity_file: the cut-out's opacity (its
+    alpha test's outcome per texel) as a PNG, both relative to the scene's folder, or None."""
     pbr = mat.get("pbrMetallicRoughness", {})
     base = pbr.get("baseColorFactor", [1, 1, 1, 1])
     metallic = min(max(float(pbr.get("metallicFactor", 1.0)), 0.0), 1.0)
     roughness = min(max(float(pbr.get("roughnessFactor", 1.0)), 0.0), 1.0)
-    if "baseColorTexture" in pbr:
+    textured = texture_file is not None and metallic <= 0.0 and roughness >= 1.0 and all(v == 1 for v in base[:3])
+    if "baseColorTexture" in pbr and not textured:
         print(f"warning: {name}: baseColorTexture not converted, baseColorFactor used", file=sys.stderr)
     transmission = ext_number(mat, "KHR_materials_transmission", "transmissionFactor", 0.0)
     ior = ext_number(mat, "KHR_materials_ior", "ior", 1.5)
@@ -184,6 +220,10 @@ def material_xml(mat, name):
     elif metallic >= 1.0 and roughness < 0.05:
         bsdf = (f'<bsdf type="twosided"><bsdf type="conductor"><string name="material" value="none"/>'
                 f'<rgb name="specular_reflectance" value="{rgb(base)}"/></bsdf></bsdf>')
+    elif textured:
+        bsdf = (f'<bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+                f'<string name="filename" value="{texture_file}"/><string name="filter_type" value="bilinear"/>'
+                f'</texture></bsdf></bsdf>')
     elif metallic <= 0.0 and roughness >= 1.0:
         bsdf = (f'<bsdf type="twosided"><bsdf type="diffuse">'
                 f'<rgb name="reflectance" value="{rgb(base)}"/></bsdf></bsdf>')
@@ -192,6 +232,12 @@ def material_xml(mat, name):
                 f'<rgb name="base_color" value="{rgb(base)}"/>'
                 f'<float name="metallic" value="{metallic:.9g}"/>'
                 f'<float name="roughness" value="{roughness:.9g}"/></bsdf></bsdf>')
+    mode = mat.get("alphaMode", "OPAQUE")
+    if mode in ("MASK", "BLEND"):
+        opacity = (f'<texture type="bitmap" name="opacity"><string name="filename" value="{opacity_file}"/>'
+                   f'<string name="filter_type" value="nearest"/><boolean name="raw" value="true"/></texture>'
+                   if opacity_file else f'<float name="opacity" value="{cut_level(mat, 1.0):.9g}"/>')
+        bsdf = f'<bsdf type="mask">{opacity}{bsdf}</bsdf>'
     strength = ext_number(mat, "KHR_materials_emissive_strength", "emissiveStrength", 1.0)
     emission = [float(v) * strength for v in mat.get("emissiveFactor", [0, 0, 0])]
     emitter = ""
@@ -200,19 +246,50 @@ def material_xml(mat, name):
     return bsdf, emitter
 
 
+def cut_level(mat, alpha):
+    """raysplat's alpha test as an opacity: MASK 0 or 1 by alphaCutoff, BLEND the alpha."""
+    factor = float(mat.get("pbrMetallicRoughness", {}).get("baseColorFactor", [1, 1, 1, 1])[3])
+    a = factor * alpha
+    if mat.get("alphaMode") == "MASK":
+        return np.where(a >= float(mat.get("alphaCutoff", 0.5)), 1.0, 0.0)
+    return a
+
+
+def material_textures(doc, buffers, mi, mat, scene_path, outdir):
+    """(texture PNG, opacity PNG) of material mi, written under OUTDIR/textures/, or Nones."""
+    texture = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture", {}).get("index")
+    if texture is None:
+        return None, None
+    os.makedirs(os.path.join(outdir, "textures"), exist_ok=True)
+    rgba = image_of_texture(doc, buffers, texture, scene_path)
+    colour = f"textures/material{mi}_colour.png"
+    write_png(os.path.join(outdir, colour), np.ascontiguousarray(rgba[:, :, :3]))
+    opacity = None
+    if mat.get("alphaMode") in ("MASK", "BLEND"):
+        level = cut_level(mat, rgba[:, :, 3].astype(np.float64) / 255.0)
+        opacity = f"textures/material{mi}_opacity.png"
+        write_png(os.path.join(outdir, opacity), np.round(level * 255.0).astype(np.uint8))
+    return colour, opacity
+
+
 DEFAULT_MATERIAL = {"name": "default", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1],
                                                                "metallicFactor": 0, "roughnessFactor": 1}}
 
 
 # -- Writing ------------------------------------------------------------------------------
 
-def write_ply(path, positions, normals, faces):
+def write_ply(path, positions, normals, faces, uvs=None):
     header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(positions)}",
               "property float x", "property float y", "property float z"]
+    columns = [positions]
     if normals is not None:
         header += ["property float nx", "property float ny", "property float nz"]
+        columns.append(normals)
+    if uvs is not None:  # glTF's v runs down the image, as Mitsuba's bitmap reads it
+        header += ["property float u", "property float v"]
+        columns.append(uvs)
     header += [f"element face {len(faces)}", "property list uchar uint vertex_indices", "end_header"]
-    vert = positions.astype("<f4") if normals is None else np.hstack([positions, normals]).astype("<f4")
+    vert = np.hstack(columns).astype("<f4")
     face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<u4", 3)])
     face["n"] = 3
     face["i"] = faces
@@ -242,9 +319,12 @@ def convert(scene_path, outdir, width=256, height=256, spp=256, camera_name=None
     body, camera = [], None
     lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
     mesh_count = 0
+    textures = {}
     for ni, world in walk_nodes(doc):
         node = doc["nodes"][ni]
         node_name = f"node {ni} '{node.get('name', '')}'"
+        if node.get("extras", {}).get("raysplat_portal") in (True, 1):
+            continue  # a light portal: not geometry
         if "camera" in node and camera is None:
             cam = doc["cameras"][node["camera"]]
             if cam.get("type") == "perspective" and (camera_name is None or node.get("name") == camera_name):
@@ -273,16 +353,24 @@ def convert(scene_path, outdir, width=256, height=256, spp=256, camera_name=None
             if "NORMAL" in prim["attributes"]:
                 n = read_accessor(doc, buffers, prim["attributes"]["NORMAL"]).astype(np.float64) @ normal_matrix.T
                 normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-20)
-            ply = f"meshes/mesh{mesh_count:03d}.ply"
-            mesh_count += 1
-            write_ply(os.path.join(outdir, ply), wpos, normals, np.ascontiguousarray(faces))
             mi = prim.get("material")
             mat = materials[mi] if mi is not None else DEFAULT_MATERIAL
-            bsdf, emitter = material_xml(mat, f"{scene_path}: material {mi} '{mat.get('name', '')}'")
+            if mi is not None and mi not in textures:
+                textures[mi] = material_textures(doc, buffers, mi, mat, scene_path, outdir)
+            texture_file, opacity_file = textures.get(mi, (None, None))
+            uvs = None
+            if texture_file is not None and "TEXCOORD_0" in prim["attributes"]:
+                uvs = read_accessor(doc, buffers, prim["attributes"]["TEXCOORD_0"]).astype(np.float64)
+            ply = f"meshes/mesh{mesh_count:03d}.ply"
+            mesh_count += 1
+            write_ply(os.path.join(outdir, ply), wpos, normals, np.ascontiguousarray(faces), uvs)
+            bsdf, emitter = material_xml(mat, f"{scene_path}: material {mi} '{mat.get('name', '')}'",
+                                         texture_file, opacity_file)
             face_normals = "" if normals is not None else '<boolean name="face_normals" value="true"/>'
             body.append(f'<shape type="ply" id={quoteattr(f"mesh{mesh_count - 1:03d}")}>'
                         f'<string name="filename" value="{ply}"/>{face_normals}{bsdf}{emitter}</shape>'
                         f'<!-- {name}, material {mat.get("name", "")} -->')
+    body += environment_xml(doc, scene_path)
     if camera is None:
         raise GltfError(f"{scene_path}: no perspective camera" +
                         (f" named '{camera_name}'" if camera_name else ""))
@@ -298,7 +386,9 @@ def convert(scene_path, outdir, width=256, height=256, spp=256, camera_name=None
               f'<integer name="height" value="{height}"/><string name="pixel_format" value="rgb"/>'
               f'<rfilter type="box"/></film></sensor>')
     # raysplat's max depth counts path segments; Mitsuba's counts vertices, emitter included.
-    integrator = (f'<integrator type="path"><integer name="max_depth" value="{max_depth + 1}"/>'
+    # Mitsuba's `path` lets no shadow ray through a cut-out (mask) surface, `volpath` does.
+    kind = "volpath" if any(m.get("alphaMode") in ("MASK", "BLEND") for m in materials) else "path"
+    integrator = (f'<integrator type="{kind}"><integer name="max_depth" value="{max_depth + 1}"/>'
                   f'<integer name="rr_depth" value="5"/></integrator>')
     xml = ('<?xml version="1.0" encoding="utf-8"?>\n'
            f'<!-- Converted from {os.path.basename(scene_path)} by raysplat scripts/gltf_to_mitsuba.py -->\n'
@@ -308,6 +398,24 @@ def convert(scene_path, outdir, width=256, height=256, spp=256, camera_name=None
         f.write(xml)
     os.replace(path + ".tmp", path)
     return path
+
+
+def environment_xml(doc, scene_path):
+    """The scene's extras raysplat_sky or raysplat_env as Mitsuba emitters (docs/design.md §4).
+    Mitsuba's envmap puts the image's centre column along its local +Z and a quarter from the
+    left along +X; raysplat (Blender) along +X and −Z: turned 90° about +Y, less the rotation."""
+    scenes = doc.get("scenes", [])
+    extras = scenes[doc.get("scene", 0)].get("extras", {}) if scenes else {}
+    out = []
+    if "raysplat_sky" in extras:
+        out.append(f'<emitter type="constant"><rgb name="radiance" value="{rgb(extras["raysplat_sky"])}"/></emitter>')
+    if "raysplat_env" in extras:
+        path = os.path.abspath(os.path.join(os.path.dirname(scene_path), extras["raysplat_env"]))
+        turn = 90.0 - float(extras.get("raysplat_env_rotation", 0.0))
+        out.append(f'<emitter type="envmap"><string name="filename" value={quoteattr(path)}/>'
+                   f'<float name="scale" value="{float(extras.get("raysplat_env_strength", 1.0)):.9g}"/>'
+                   f'<transform name="to_world"><rotate y="1" angle="{turn:.9g}"/></transform></emitter>')
+    return out
 
 
 def light_xml(light, world):

@@ -17,6 +17,10 @@
                            wavy glass (a pool's surface), a small light above
                            it, the camera below: everything it sees is lit
                            through the glass (caustics)
+  daylight.gltf + .bin     a furnished room lit by the sun and a uniform sky
+                           (the scene's extras) through a 1 m² window with a
+                           blind, the opening marked as a light portal, and a
+                           potted plant of alpha-masked leaves in the sun
 
 Usage:  python3 scripts/make_scenes.py [outdir]
 
@@ -269,13 +273,42 @@ class GltfBuilder:
             self.extensions.update(ext)
         return self._append("materials", mat)
 
-    def mesh(self, name, geom, material):
+    def mesh(self, name, geom, material, uvs=None):
         pos, nrm, idx = geom
         prim = {"attributes": {"POSITION": self._vec3_accessor(pos, True),
                                "NORMAL": self._vec3_accessor(nrm, False)},
                 "indices": self._index_accessor(idx, len(pos)),
                 "material": material, "mode": TRIANGLES}
+        if uvs is not None:
+            flat = [c + 0.0 for uv in uvs for c in uv]
+            data = struct.pack("<%df" % len(flat), *flat)
+            prim["attributes"]["TEXCOORD_0"] = self._append("accessors", {
+                "bufferView": self._view(data, ARRAY_BUFFER),
+                "componentType": FLOAT, "count": len(uvs), "type": "VEC2"})
         return self._append("meshes", {"name": name, "primitives": [prim]})
+
+    def png_texture(self, name, png):
+        """A texture of a PNG held in the buffer."""
+        self.bin += b"\0" * (-len(self.bin) % 4)
+        view = self._append("bufferViews", {"buffer": 0, "byteOffset": len(self.bin),
+                                            "byteLength": len(png)})
+        self.bin += png
+        image = self._append_list("images", {"name": name, "bufferView": view,
+                                             "mimeType": "image/png"})
+        return self._append_list("textures", {"name": name, "source": image})
+
+    def _append_list(self, key, obj):
+        self.doc.setdefault(key, []).append(obj)
+        return len(self.doc[key]) - 1
+
+    def directional_light(self, name, direction, intensity, color=(1.0, 1.0, 1.0)):
+        """A sun shining along `direction` (glTF lights shine down their node's -Z)."""
+        self.extensions.add("KHR_lights_punctual")
+        self.lights.append({"name": name, "type": "directional",
+                            "color": vec(color), "intensity": f32(intensity)})
+        d = normalize(direction)
+        return self.node(name, r=quat_between((0.0, 0.0, -1.0), d), extensions={
+            "KHR_lights_punctual": {"light": len(self.lights) - 1}})
 
     def node(self, name, parent=None, mesh=None, t=None, r=None, s=None,
              **fields):
@@ -781,6 +814,132 @@ def interior(outdir):
     return g
 
 
+def png_rgba(width, height, pixel):
+    """PNG bytes of an 8-bit RGBA image; pixel(x, y) gives (r, g, b, a) in 0..255."""
+    import zlib
+    raw = b"".join(b"\0" + bytes(c for x in range(width) for c in pixel(x, y))
+                   for y in range(height))
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+
+
+def leaf_png(size=32):
+    """A leaf: opaque inside a pointed oval along the image's v axis, clear outside."""
+    def pixel(x, y):
+        u = (x + 0.5) / size * 2.0 - 1.0
+        v = (y + 0.5) / size * 2.0 - 1.0
+        half_width = 0.55 * (1.0 - v * v) ** 1.5  # pointed at both ends
+        inside = abs(u) <= half_width or (abs(u) < 0.04 and v > 0.7)  # and a stalk
+        shade = 120 + int(60 * (1.0 - abs(u)))
+        return (40, shade, 30, 255 if inside else 0)
+    return png_rgba(size, size, pixel)
+
+
+# The daylight room: x in [-DAY_X, DAY_X], z in [-DAY_Z, DAY_Z], a window of 1 m² in the left
+# wall (a tenth of its 10.8 m²) with a blind, lit by the sun and a uniform sky through it.
+DAY_X, DAY_H, DAY_Z = 2.5, 2.7, 2.0
+DAY_WIN_Z0, DAY_WIN_Z1, DAY_WIN_Y0, DAY_WIN_Y1 = -0.9, 0.1, 0.9, 1.9
+DAY_WIN_DEPTH = 0.25
+
+
+def daylight(outdir):
+    g = GltfBuilder("daylight")
+    g.doc["scenes"][0]["extras"] = {"raysplat_sky": vec((1.0, 1.25, 1.75))}
+    wall = g.material("wall", (0.72, 0.7, 0.66))
+    ceiling = g.material("ceiling", (0.8, 0.8, 0.8))
+    floor = g.material("floor", (0.5, 0.36, 0.24))
+    trim = g.material("trim", (0.85, 0.84, 0.8))
+    wood = g.material("wood", (0.38, 0.24, 0.13))
+    fabric = g.material("sofa", (0.25, 0.32, 0.45))
+    rug = g.material("rug", (0.55, 0.2, 0.15))
+    clay = g.material("pot", (0.55, 0.3, 0.2))
+    leaf = g.material("leaf", (1.0, 1.0, 1.0))
+    leaf_tex = g.png_texture("leaf", leaf_png())
+    m = g.doc["materials"][leaf]
+    m["pbrMetallicRoughness"]["baseColorTexture"] = {"index": leaf_tex}
+    m["alphaMode"] = "MASK"
+    m["alphaCutoff"] = 0.5
+    m["doubleSided"] = True
+    cube = unit_cube()
+    meshes = {}
+
+    def box(name, material, lo, hi):
+        if material not in meshes:
+            meshes[material] = g.mesh("cube_%d" % material, cube, material)
+        g.node(name, mesh=meshes[material],
+               t=tuple((a + b) / 2 for a, b in zip(lo, hi)),
+               s=tuple(b - a for a, b in zip(lo, hi)))
+
+    def quad(name, geom, material, **fields):
+        g.node(name, mesh=g.mesh(name, geom, material), **fields)
+
+    quad("floor", rect((0, 0, 0), mul(X, DAY_X), mul(Z, DAY_Z), Y), floor)
+    quad("ceiling", rect((0, DAY_H, 0), mul(X, DAY_X), mul(Z, DAY_Z), mul(Y, -1)), ceiling)
+    quad("back_wall", rect((0, DAY_H / 2, -DAY_Z), mul(X, DAY_X), mul(Y, DAY_H / 2), Z), wall)
+    quad("front_wall", rect((0, DAY_H / 2, DAY_Z), mul(X, DAY_X), mul(Y, DAY_H / 2), mul(Z, -1)), wall)
+    quad("right_wall", rect((DAY_X, DAY_H / 2, 0), mul(Y, DAY_H / 2), mul(Z, DAY_Z), mul(X, -1)), wall)
+
+    def left_piece(z0, z1, y0, y1):
+        return rect((-DAY_X, (y0 + y1) / 2, (z0 + z1) / 2), mul(Y, (y1 - y0) / 2), mul(Z, (z1 - z0) / 2), X)
+    quad("left_wall", merge(
+        left_piece(-DAY_Z, DAY_WIN_Z0, 0, DAY_H), left_piece(DAY_WIN_Z1, DAY_Z, 0, DAY_H),
+        left_piece(DAY_WIN_Z0, DAY_WIN_Z1, 0, DAY_WIN_Y0),
+        left_piece(DAY_WIN_Z0, DAY_WIN_Z1, DAY_WIN_Y1, DAY_H)), wall)
+    xr = -DAY_X - DAY_WIN_DEPTH / 2
+    hz, hy, hd = (DAY_WIN_Z1 - DAY_WIN_Z0) / 2, (DAY_WIN_Y1 - DAY_WIN_Y0) / 2, DAY_WIN_DEPTH / 2
+    zc, yc = (DAY_WIN_Z0 + DAY_WIN_Z1) / 2, (DAY_WIN_Y0 + DAY_WIN_Y1) / 2
+    quad("window_reveal", merge(
+        rect((xr, DAY_WIN_Y0, zc), mul(X, hd), mul(Z, hz), Y),
+        rect((xr, DAY_WIN_Y1, zc), mul(X, hd), mul(Z, hz), mul(Y, -1)),
+        rect((xr, yc, DAY_WIN_Z0), mul(X, hd), mul(Y, hy), Z),
+        rect((xr, yc, DAY_WIN_Z1), mul(X, hd), mul(Y, hy), mul(Z, -1))), trim)
+    # The opening's outer face is the light portal: the sun's and the sky's photons enter there.
+    quad("window_portal", rect((-DAY_X - DAY_WIN_DEPTH, yc, zc), mul(Y, hy), mul(Z, hz), X), trim,
+         extras={"raysplat_portal": True})
+    # A blind of 9 slats, 1 cm thick and 5 cm deep, 11 cm apart: the sun comes in stripes.
+    for i in range(9):
+        y = DAY_WIN_Y0 + 0.06 + i * 0.11
+        box("blind_slat_%d" % i, trim, (-DAY_X - 0.08, y, DAY_WIN_Z0), (-DAY_X - 0.03, y + 0.01, DAY_WIN_Z1))
+    # Mouldings and furniture: enough to make the indirect light matter.
+    box("skirting_back", trim, (-DAY_X, 0, -DAY_Z), (DAY_X, 0.1, -DAY_Z + 0.02))
+    box("skirting_right", trim, (DAY_X - 0.02, 0, -DAY_Z), (DAY_X, 0.1, DAY_Z))
+    box("rug", rug, (-0.6, 0, -0.9), (1.2, 0.01, 0.6))
+    box("sofa_seat", fabric, (1.6, 0.0, -1.2), (2.4, 0.42, 0.8))
+    box("sofa_back", fabric, (2.2, 0.42, -1.2), (2.4, 0.85, 0.8))
+    for side, z0 in (("a", -1.35), ("b", 0.8)):
+        box("sofa_arm_" + side, fabric, (1.6, 0.0, z0), (2.4, 0.6, z0 + 0.15))
+    tx, tz = 0.3, -0.15
+    box("table_top", wood, (tx - 0.45, 0.42, tz - 0.3), (tx + 0.45, 0.45, tz + 0.3))
+    for i, (dx, dz) in enumerate(((-0.42, -0.27), (0.39, -0.27), (-0.42, 0.24), (0.39, 0.24))):
+        box("table_leg_%d" % i, wood, (tx + dx, 0, tz + dz), (tx + dx + 0.03, 0.42, tz + dz + 0.03))
+    for i in range(4):
+        y = 0.3 + i * 0.4
+        box("shelf_%d" % i, wood, (-1.4, y, -DAY_Z + 0.02), (-0.4, y + 0.02, -DAY_Z + 0.3))
+    # A potted plant in the sun's path: alpha-masked leaves on a stem.
+    px, pz = -1.55, -1.05
+    box("pot", clay, (px - 0.14, 0, pz - 0.14), (px + 0.14, 0.3, pz + 0.14))
+    box("stem", wood, (px - 0.01, 0.3, pz - 0.01), (px + 0.01, 1.15, pz + 0.01))
+    leaf_uvs = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)]
+    for i in range(10):
+        angle = i * 2.399963  # golden angle
+        y = 0.65 + 0.05 * i
+        out = (math.cos(angle), 0.0, math.sin(angle))
+        side = (-math.sin(angle), 0.0, math.cos(angle))
+        tilt = normalize(add(out, (0.0, 0.35, 0.0)))
+        centre = (px + 0.16 * out[0], y, pz + 0.16 * out[2])
+        geom = rect(centre, mul(tilt, 0.16), mul(side, 0.07), cross(tilt, side))
+        g.node("leaf_%d" % i, mesh=g.mesh("leaf_%d" % i, geom, leaf, uvs=leaf_uvs))
+    g.directional_light("sun", (0.8, -0.5, -0.25), 30.0, color=(1.0, 0.93, 0.82))
+    g.camera("camera", eye=(2.1, 1.45, 1.75), target=(-1.2, 0.7, -1.0), yfov=1.0, aspect=1.333)
+    g.write_gltf(os.path.join(outdir, "daylight.gltf"))
+    return g
+
+
 def main(argv):
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
@@ -788,7 +947,7 @@ def main(argv):
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
                   lambda d: two_rooms(d, gap=True), caustic_pool, point_shadows,
-                  interior):
+                  interior, daylight):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n

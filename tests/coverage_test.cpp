@@ -156,3 +156,13 @@ TEST(IndirectBias, ConvexEdgesUnderAPointLightMatchThePathTracer) {
     RecordProperty("indirect_ratio", std::to_string(ratio));
     EXPECT_NEAR(ratio, 1.0, 0.02);
 }
+
+// The daylight room: the sun and a uniform sky (the scene's own extras) through a window with a
+// blind, their photons entering through the window's portal, alpha-masked leaves in the sun.
+TEST(IndirectBias, DaylightThroughAPortalMatchesThePathTracer) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    const double ratio = indirectRatio(std::string(data) + "/daylight.gltf", 64, 1024);
+    RecordProperty("indirect_ratio", std::to_string(ratio));
+    EXPECT_NEAR(ratio, 1.0, 0.03);
+}

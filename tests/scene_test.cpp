@@ -517,6 +517,38 @@ TEST(Loader, PortalNodesAreNotGeometry) {
     EXPECT_EQ(s.objectNames.size(), 2u);
 }
 
+// The scene's extras carry its environment: raysplat_sky, or raysplat_env (a file beside the
+// glTF) with its strength and rotation; a malformed value is an error naming the scene.
+TEST(Loader, SceneExtrasGiveTheEnvironment) {
+    TempDir dir;
+    auto load = [&](const std::string& extras) {
+        GltfBuilder g;
+        g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}))})));
+        std::string path = g.write(dir, "env");
+        // Put the extras on scene 0.
+        std::ifstream in(path);
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string from = "\"scenes\":[{\"nodes\":[0]";
+        text.replace(text.find(from), from.size(), from + ",\"extras\":{" + extras + "}");
+        writeFile(path, text);
+        return loadScene(path, silentReporter());
+    };
+    Scene sky = load("\"raysplat_sky\":[0.5,1,2]");
+    EXPECT_EQ(sky.environment.sky, Vec3(0.5f, 1.f, 2.f));
+    EXPECT_TRUE(sky.environment.file.empty());
+    Scene env = load("\"raysplat_env\":\"sky.exr\",\"raysplat_env_strength\":3,\"raysplat_env_rotation\":90");
+    EXPECT_EQ(env.environment.file, (dir.path() / "sky.exr").string());
+    EXPECT_EQ(env.environment.strength, 3.f);
+    EXPECT_EQ(env.environment.rotation, 90.f);
+    try {
+        load("\"raysplat_sky\":[1,-1,1]");
+        FAIL() << "expected an Error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("scene 0"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("raysplat_sky"), std::string::npos) << e.what();
+    }
+}
+
 // Without an indices accessor, vertices 3t..3t+2 form triangle t; a trailing partial triangle is dropped.
 TEST(Loader, NonIndexedPrimitive) {
     TempDir dir;

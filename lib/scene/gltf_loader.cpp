@@ -53,6 +53,7 @@ Scene GltfLoader::loadAll() {
     int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
     if (sceneIndex >= int(model_.scenes.size())) fail("'scene' " + std::to_string(sceneIndex) + " does not exist");
     for (int root : model_.scenes[sceneIndex].nodes) visitNode(root, Mat4(1.f), 0);
+    readEnvironment(model_.scenes[sceneIndex].extras, quoted("scene", sceneIndex, model_.scenes[sceneIndex].name));
 
     if (scene_.triangleCount() == 0) fail("the scene has no triangles");
     scene_.computeBounds();
@@ -60,6 +61,33 @@ Scene GltfLoader::loadAll() {
     // tinygltf's warning only once the load succeeded: a failed load is one error line.
     if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
     return std::move(scene_);
+}
+
+void GltfLoader::readEnvironment(const tinygltf::Value& extras, const std::string& where) {
+    if (!extras.IsObject()) return;
+    auto number = [&](const char* key, float& out) {
+        if (!extras.Has(key)) return;
+        const tinygltf::Value& v = extras.Get(key);
+        if (!v.IsNumber() || !std::isfinite(v.GetNumberAsDouble())) fail(where + ": extras." + key + " is not a number");
+        out = float(v.GetNumberAsDouble());
+    };
+    if (extras.Has("raysplat_sky")) {
+        const tinygltf::Value& v = extras.Get("raysplat_sky");
+        if (!v.IsArray() || v.ArrayLen() != 3) fail(where + ": extras.raysplat_sky is not three numbers");
+        for (int c = 0; c < 3; ++c) {
+            const tinygltf::Value& x = v.Get(c);
+            if (!x.IsNumber() || !(x.GetNumberAsDouble() >= 0.0)) fail(where + ": extras.raysplat_sky has a negative or non-number value");
+            scene_.environment.sky[c] = float(x.GetNumberAsDouble());
+        }
+    }
+    if (extras.Has("raysplat_env")) {
+        const tinygltf::Value& v = extras.Get("raysplat_env");
+        if (!v.IsString() || v.Get<std::string>().empty()) fail(where + ": extras.raysplat_env is not a file name");
+        // Relative to the glTF file.
+        scene_.environment.file = (std::filesystem::path(path_).parent_path() / v.Get<std::string>()).string();
+    }
+    number("raysplat_env_strength", scene_.environment.strength);
+    number("raysplat_env_rotation", scene_.environment.rotation);
 }
 
 void GltfLoader::fail(const std::string& what, ErrorKind kind) const {

@@ -43,6 +43,9 @@ private:
     void checkExtensions();
     void visitNode(int index, const Mat4& parent, int depth);
     void addCamera(int index, const Mat4& world, const std::string& nodeWhere);
+    // The scene's extras raysplat_sky [r, g, b], raysplat_env (a file beside the glTF),
+    // raysplat_env_strength and raysplat_env_rotation: Scene::environment.
+    void readEnvironment(const tinygltf::Value& extras, const std::string& where);
     // A node whose extras (Blender: the object's custom properties, exported with "Include:
     // Custom Properties") set raysplat_portal to true or 1 is a light portal, not geometry.
     static constexpr const char* kPortalProperty = "raysplat_portal";

@@ -101,6 +101,13 @@ struct Scene {
     // interior, 3 positions a triangle. Not geometry: nothing hits them. Photons from
     // directional lights and the environment are sent through them when there are any.
     std::vector<Vec3> portals;
+    // The environment the file asks for (its scene's extras; docs/design.md §4): render options
+    // (`env`, `sky`) replace it.
+    struct EnvironmentSettings {
+        std::string file;  // an equirectangular OpenEXR; empty: none
+        float strength = 1.f, rotation = 0.f;  // rotation in degrees, as `env-rotation`
+        Vec3 sky{0.f};     // a uniform sky; black: none
+    } environment;
     std::vector<Camera> cameras;  // every perspective camera of the file, in node order
     Bounds3 bounds;
 
