@@ -137,6 +137,11 @@ Arguments parseRender(int argc, char** argv) {
              "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
                  std::to_string(RenderConfig{}.coverageProbes) + ", 0..16; 0: no correction)",
              [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
+    cmd.add({"--min-coverage", "C",
+             "the least coverage a photon's flux is divided by: fewer fireflies on thin parts, for a measured bias under 0.5 % "
+             "of the indirect light "
+             "(default " + numberText(RenderConfig{}.minCoverage) + ", 0..1; 0: none)",
+             [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
     cmd.add({"--direct-spp", "N",
              "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
              "and normal, apart from the photons' receivers (default " + std::to_string(RenderConfig{}.directSpp) +

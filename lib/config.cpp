@@ -85,6 +85,7 @@ void RenderConfig::validate() const {
     requireRange("light-samples", lightSamples, 1, 4096);
     requireRange("direct-spp", directSpp, 0, 1 << 16);
     requireRange("coverage-probes", coverageProbes, 0, CoverageSettings::kMaxProbes);
+    requireRange("min-coverage", minCoverage, 0, 1);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
     requireRange("max-depth", maxDepth, 1, 1024);
@@ -147,6 +148,12 @@ std::string tripleText(const ClassTriple& v) {
     return b;
 }
 
+std::string numberText(float v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return b;
+}
+
 ImageAttributes RenderConfig::attributes() const {
     ImageAttributes a = {{"method", methodName(method)},
             {"spp", std::to_string(samplesPerPixel())},
@@ -176,6 +183,7 @@ ImageAttributes RenderConfig::attributes() const {
         if (method == Method::Splat) {
             a["visibility"] = visibilityName(visibilityUsed());
             if (visibilityUsed() == Visibility::Rays) a["coverageProbes"] = std::to_string(coverageProbes);
+            if (visibilityUsed() == Visibility::Rays) a["minCoverage"] = std::to_string(minCoverage);
         }
     }
     return a;

@@ -41,6 +41,7 @@ Visibility parseVisibility(const std::string& name);  // throws Error(Config)
 // A per-class triple as "a,b,c", each number in its shortest form (%g): the EXR header's
 // settings and --help's defaults.
 std::string tripleText(const ClassTriple& v);
+std::string numberText(float v);  // %g
 
 struct RenderConfig {
     std::string scene;
@@ -104,6 +105,9 @@ struct RenderConfig {
     // Probes a photon for its kernel's coverage with `visibility` rays (0: none, the kernels'
     // light past edges and corners lost). Defaults: CoverageSettings.
     int coverageProbes = CoverageSettings{}.probes;
+    // The least coverage a photon's flux is divided by: a bound on its weight against fireflies,
+    // at a measured bias (CoverageSettings::minCoverage). 0: none.
+    float minCoverage = CoverageSettings{}.minCoverage;
 
     // Occlusion grid (docs/design.md §5–6).
     int grid = GridSettings{}.resolution;             // voxels along the scene's longest axis

@@ -97,6 +97,7 @@ PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
 CoverageSettings coverageSettings(const RenderConfig& cfg) {
     CoverageSettings cs;
     cs.probes = cfg.coverageProbes;
+    cs.minCoverage = cfg.minCoverage;
     cs.seed = cfg.seed;
     return cs;
 }

@@ -2,6 +2,7 @@
 // photon, in parallel over the photons; each photon's numbers depend only on (seed, pass, index).
 #include "splat/coverage.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/log.h"
@@ -108,7 +109,7 @@ void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const Co
             st.coverageSum += c;
             if (c < 1.f) ++st.partial;
             if (c > 0.f)
-                ray.flux /= c;
+                ray.flux /= std::max(c, settings.minCoverage);
             else
                 ++st.uncovered;
         }
