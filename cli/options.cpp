@@ -112,7 +112,10 @@ Arguments parseRender(int argc, char** argv) {
                 "the paper's own estimator (4 samples a pixel, 100000 photons split 20/50/30, GPU voxelization\n"
                 "into an occlusion mask of grid 192, no coverage correction). Outputs are written atomically: a\n"
                 "failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or with fewer\n"
-                "passes than ranks each pass's photons, are divided between the ranks: the same image.");
+                "passes than ranks each pass's photons, are divided between the ranks: the same image. Scenes may\n"
+                "be lit by a sky (--env, --sky, or the glTF scene's extras raysplat_sky / raysplat_env); nodes whose\n"
+                "extras set raysplat_portal are light portals (windows): the sun's and the sky's photons enter\n"
+                "through them. glTF alphaMode MASK and BLEND cut surfaces everywhere, the voxel grid included.");
     cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});

@@ -232,7 +232,10 @@ def bad_scene_tests(tmp):
     ]
 
 
-def bad_setting_tests():
+def bad_setting_tests(tmp):
+    # A square EXR: an image, but not an equirectangular environment.
+    not_equirect = os.path.join(tmp, "square_sky.exr")
+
     def case(name, extra, *names, exr="img.exr", png="img.png", stats="stats.json"):
         def test():
             with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
@@ -241,6 +244,9 @@ def bad_setting_tests():
                     args += ["-o", os.path.join(out, exr)]
                 args += ["--png", os.path.join(out, png), "--stats-json", os.path.join(out, stats)]
                 args += [a for a in extra if a != "NO_OUTPUT"]
+                if not_equirect in args and not os.path.exists(not_equirect):
+                    run("render", CORNELL, "-o", not_equirect, "--width", "8", "--height", "8", "--spp", "1",
+                        "--passes", "1", "--quiet")
                 expect_clean_error(name, args, list(names), out)
         return name, test
 
@@ -260,10 +266,12 @@ def bad_setting_tests():
         case("--light-samples 0", ["--light-samples", "0", "--width", "16"], "--light-samples"),
         case("--visibility bogus", ["--visibility", "bogus", "--width", "16"], "--visibility", "bogus", "mask"),
         case("--coverage-probes 17", ["--coverage-probes", "17", "--width", "16"], "--coverage-probes", "0..16"),
+        case("--min-coverage 2", ["--min-coverage", "2", "--width", "16"], "--min-coverage", "0..1"),
         case("--direct-spp -1", ["--direct-spp", "-1", "--width", "16"], "--direct-spp"),
         case("missing -o", ["NO_OUTPUT", "--width", "16", "--spp", "1"], "-o"),
         case("--env missing", ["--env", "no_such_sky.exr", "--width", "16"], "no_such_sky.exr", "no such file"),
         case("--env not an EXR", ["--env", CORNELL, "--width", "16", "--spp", "1"], CORNELL, "OpenEXR"),
+        case("--env not 2:1", ["--env", not_equirect, "--width", "16", "--spp", "1"], not_equirect, "twice as wide"),
         case("--env with --sky", ["--env", CORNELL, "--sky", "1", "--width", "16"], "--env", "--sky"),
         case("--sky -1", ["--sky", "-1", "--width", "16"], "--sky"),
         case("--sky 1,2", ["--sky", "1,2", "--width", "16"], "--sky", "1,2"),
@@ -552,7 +560,7 @@ def main():
     passed = failed = 0
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
         tests = [("bad scene: " + n, f) for n, f in bad_scene_tests(tmp)]
-        tests += [("bad setting: " + n, f) for n, f in bad_setting_tests()]
+        tests += [("bad setting: " + n, f) for n, f in bad_setting_tests(tmp)]
         tests += [("interrupted: " + n, f) for n, f in interrupt_tests()]
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,

@@ -85,3 +85,48 @@ TEST(Cutout, BlendedCardShowsHalfAndPassesHalfTheSun) {
     for (const RenderResult* r : {&splat, &path})
         EXPECT_NEAR(layerMean(r->film, kDirect), 0.5 * 0.3 + 0.5 * 0.5 * 0.6, 0.01);
 }
+
+// The masked checker card against the same shape cut as geometry: its eight solid texels as
+// quads of their own. Every 8 × 8-pixel block of the direct and indirect layers agrees (path
+// tracer, the floor's and card's light through and around the holes).
+TEST(Cutout, MaskedCardEqualsTheSameShapeAsGeometry) {
+    const Scene masked = cardOverFloor(AlphaMode::Mask, true);
+    Scene cut = cardOverFloor(AlphaMode::Opaque, true);
+    // Drop the card's two triangles, add its solid texels: texel (i, j) covers x = −1 + 0.5i,
+    // z = −1 + 0.5j (uv = ((x + 1)/2, (z + 1)/2)); solid where (i + j + 1) is odd.
+    const uint32_t card = cut.triMaterial.back();
+    for (int k = 0; k < 2; ++k) {
+        cut.positions.resize(cut.positions.size() - 3);
+        cut.normals.resize(cut.normals.size() - 3);
+        cut.uvs.resize(cut.uvs.size() - 3);
+        cut.triMaterial.pop_back();
+        cut.triObject.pop_back();
+    }
+    cut.materials[card].baseColorTexture = -1;
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            if ((i + j + 1) % 2 == 0) continue;
+            const float x0 = -1.f + 0.5f * i, z0 = -1.f + 0.5f * j;
+            addQuad(cut, {x0, 1, z0}, {x0, 1, z0 + 0.5f}, {x0 + 0.5f, 1, z0 + 0.5f}, {x0 + 0.5f, 1, z0}, card);
+        }
+    cut.computeBounds();
+    RenderConfig cfg = config(Method::Path);
+    cfg.spp = 256;
+    const RenderResult a = render(masked, cfg, silentReporter());
+    const RenderResult b = render(cut, cfg, silentReporter());
+    for (int layer : {kDirect, kIndirect}) {
+        double worst = 0.0;
+        for (int by = 0; by < 32; by += 8)
+            for (int bx = 0; bx < 32; bx += 8) {
+                double sa = 0.0, sb = 0.0;
+                for (int y = by; y < by + 8; ++y)
+                    for (int x = bx; x < bx + 8; ++x) {
+                        const Vec3 va = a.film.layers[layer][size_t(y) * 32 + x], vb = b.film.layers[layer][size_t(y) * 32 + x];
+                        sa += double(va.x) + va.y + va.z;
+                        sb += double(vb.x) + vb.y + vb.z;
+                    }
+                worst = std::max(worst, std::abs(sa - sb) / std::max(sb, 1e-6));
+            }
+        EXPECT_LT(worst, layer == kDirect ? 0.01 : 0.05) << layerName(layer);
+    }
+}

@@ -10,7 +10,11 @@
 #include "core/sampling.h"
 #include "output/image_io.h"
 #include "render.h"
+#include "core/parallel.h"
+#include "scene/accel.h"
 #include "scene/environment.h"
+#include "scene/lights.h"
+#include "splat/photons.h"
 #include "test_scenes.h"
 
 using namespace rs;
@@ -290,4 +294,135 @@ TEST(Portals, SunAndSkyPhotonsEnterThroughTheWindow) {
     EXPECT_NEAR(layerMean(none.film, kIndirect) / ref, 1.0, 0.04);
     EXPECT_NEAR(layerMean(portal.film, kIndirect) / ref, 1.0, 0.04);
     EXPECT_NEAR(layerMean(portal.film, kDirect) / layerMean(path.film, kDirect), 1.0, 0.03);
+}
+
+// data/daylight.gltf: of the photons a pass stores with the window as a portal, at least 80 %
+// land inside the room (reaching their hit point from within its walls or the window's
+// reveal); without the portal most land outside.
+TEST(Portals, DaylightPhotonsLandInsideTheRoom) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/daylight.gltf", silentReporter());
+    ASSERT_FALSE(scene.portals.empty());
+    RenderConfig cfg;
+    const Environment env = cfg.environment(scene);
+    ASSERT_FALSE(env.black());
+    ThreadPool pool(2);
+    auto insideShare = [&](const Scene& s) {
+        RayAccel accel(s, pool.size());
+        LightSampler lights(s, &env);
+        PhotonSettings ps;
+        ps.split = cfg.photonSplit();
+        ps.photons = 40000;
+        const PhotonMap map = tracePhotons(s, accel, lights, ps, pool, silentReporter());
+        int64_t inside = 0;
+        for (const PhotonRay& r : map.rays) {
+            // Just before the hit: in the room, or in the window's reveal (walls are single quads,
+            // so a hit on a wall's outside lies on the room's bounds too).
+            const Vec3 x = r.origin + (r.length - 1e-3f) * r.dir;
+            const bool room = x.x > -2.5f && x.x < 2.5f && x.y > 0.f && x.y < 2.7f && x.z > -2.f && x.z < 2.f;
+            const bool reveal = x.x > -2.75f && x.x <= -2.5f && x.y > 0.9f && x.y < 1.9f && x.z > -0.9f && x.z < 0.1f;
+            inside += room || reveal;
+        }
+        return double(inside) / double(map.rays.size());
+    };
+    const double withPortal = insideShare(scene);
+    scene.portals.clear();
+    const double without = insideShare(scene);
+    RecordProperty("inside_with_portal", std::to_string(withPortal));
+    RecordProperty("inside_without_portal", std::to_string(without));
+    EXPECT_GE(withPortal, 0.8);
+    EXPECT_LT(without, withPortal);
+}
+
+// A white furnace: a cup open to a uniform sky (a box without its top, albedo 1, seen from above
+// and from the side) reflects exactly the sky's radiance L everywhere, after however many
+// bounces; the camera sees L where it sees the sky too. Splat (photons from the sky for the
+// bounces) and path tracer alike.
+TEST(Environment, WhiteFurnaceUnderAUniformSky) {
+    Scene s;
+    s.path = "white cup";
+    const uint32_t white = addMaterial(s, MaterialKind::Lambert, Vec3(1.f));
+    addQuad(s, {-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}, white);   // bottom, inside face up
+    addQuad(s, {-1, 0, -1}, {-1, 0, 1}, {-1, 1, 1}, {-1, 1, -1}, white);
+    addQuad(s, {1, 0, -1}, {1, 1, -1}, {1, 1, 1}, {1, 0, 1}, white);
+    addQuad(s, {-1, 0, -1}, {-1, 1, -1}, {1, 1, -1}, {1, 0, -1}, white);
+    addQuad(s, {-1, 0, 1}, {1, 0, 1}, {1, 1, 1}, {-1, 1, 1}, white);
+    s.cameras.push_back(lookAt({0.4f, 2.6f, 1.9f}, {0, 0.3f, 0}, {0, 1, 0}, 1.0f));
+    s.computeBounds();
+    RenderConfig cfg = envConfig(24);
+    cfg.sky = Vec3(0.8f);
+    cfg.passes = 4;
+    cfg.maxDepth = 64;
+    const RenderResult splat = render(s, cfg, silentReporter());
+    cfg.method = Method::Path;
+    cfg.spp = 256;
+    cfg.passes = 1;
+    const RenderResult path = render(s, cfg, silentReporter());
+    for (const RenderResult* r : {&splat, &path}) {
+        const std::vector<Vec3> beauty = r->film.beautyImage();
+        DVec3 sum(0.0);
+        for (const Vec3& v : beauty) sum += DVec3(v);
+        sum /= double(beauty.size());
+        EXPECT_NEAR(sum.x, 0.8, 0.8 * 0.03) << (r == &splat ? "splat" : "path");
+    }
+}
+
+// The sun alone through a 1 m window of a closed room: on the floor the patch the window's
+// outline casts along the sun has radiance ρ/π·E·cos θ, outside it nothing direct. Pixels seen
+// well inside and well outside the patch, from above through a hole in the ceiling.
+TEST(Environment, SunPatchThroughAnOpeningIsAnalytic) {
+    Scene s;
+    s.path = "sun through a window";
+    const uint32_t grey = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
+    // Room x, z in [-2, 2], y in [0, 2]; the window in the +X wall: y in [1, 1.6], z in [-0.3, 0.3].
+    addQuad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, grey);
+    addQuad(s, {-2, 0, -2}, {2, 0, -2}, {2, 2, -2}, {-2, 2, -2}, grey);
+    addQuad(s, {-2, 0, 2}, {-2, 2, 2}, {2, 2, 2}, {2, 0, 2}, grey);
+    addQuad(s, {-2, 0, -2}, {-2, 2, -2}, {-2, 2, 2}, {-2, 0, 2}, grey);
+    addQuad(s, {-2, 2, -2}, {2, 2, -2}, {2, 2, 2}, {-2, 2, 2}, grey);  // ceiling
+    addQuad(s, {2, 0, -2}, {2, 0, 2}, {2, 1, 2}, {2, 1, -2}, grey);
+    addQuad(s, {2, 1.6f, -2}, {2, 1.6f, 2}, {2, 2, 2}, {2, 2, -2}, grey);
+    addQuad(s, {2, 1, -2}, {2, 1, -0.3f}, {2, 1.6f, -0.3f}, {2, 1.6f, -2}, grey);
+    addQuad(s, {2, 1, 0.3f}, {2, 1, 2}, {2, 1.6f, 2}, {2, 1.6f, 0.3f}, grey);
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(Vec3(-1.f, -1.f, 0.f));  // 45°: the patch is x in [0.4, 1], z in [-0.3, 0.3]
+    sun.intensity = Vec3(4.f);
+    s.lights.push_back(sun);
+    s.portals = {{2, 1, -0.3f}, {2, 1, 0.3f}, {2, 1.6f, 0.3f}, {2, 1, -0.3f}, {2, 1.6f, 0.3f}, {2, 1.6f, -0.3f}};
+    // From straight above, inside the room, looking down at x in [0.2, 1.2], z in [-0.5, 0.5].
+    Camera c;
+    c.position = {0.7f, 1.9f, 0.f};
+    c.forward = {0, -1, 0};
+    c.up = {-1, 0, 0};
+    c.right = glm::cross(c.forward, c.up);
+    c.yfov = 2.f * std::atan(0.5f / 1.9f);
+    c.aspect = 1.f;
+    s.cameras.push_back(c);
+    s.computeBounds();
+    const double want = 0.5 / kPi * 4.0 * std::cos(kPi / 4);
+    for (Method m : {Method::Splat, Method::Path}) {
+        RenderConfig cfg = envConfig(40);
+        cfg.method = m;
+        cfg.spp = m == Method::Path ? 16 : 0;
+        cfg.passes = 1;
+        const RenderResult r = render(s, cfg, silentReporter());
+        DVec3 in(0.0), out(0.0);
+        int nIn = 0, nOut = 0;
+        for (int y = 0; y < 40; ++y)
+            for (int x = 0; x < 40; ++x) {
+                // Pixel centre → floor point: the camera's right is −Z... up is −X.
+                const double fx = 0.7 - (0.5 - (y + 0.5) / 40.0) * 1.0, fz = ((x + 0.5) / 40.0 - 0.5) * 1.0;
+                const Vec3 v = r.film.layers[kDirect][size_t(y) * 40 + x];
+                const bool inside = fx > 0.45 && fx < 0.95 && std::abs(fz) < 0.25;
+                const bool outside = (fx < 0.35 || fx > 1.05) || std::abs(fz) > 0.35;
+                if (inside) in += DVec3(v), ++nIn;
+                if (outside) out += DVec3(v), ++nOut;
+            }
+        ASSERT_GT(nIn, 50);
+        ASSERT_GT(nOut, 50);
+        EXPECT_NEAR(in.x / nIn, want, 0.01 * want) << methodName(m);
+        EXPECT_LT(out.x / nOut, 1e-4) << methodName(m);
+    }
 }

@@ -151,7 +151,9 @@ Environment loadEnvironment(const std::string& path, float strength, float rotat
     } catch (const std::exception& e) {
         throw Error(ErrorKind::Io, path + ": not an OpenEXR image the environment can read (" + e.what() + ")");
     }
-    if (width < 2 || height < 1) throw Error(ErrorKind::Config, path + ": an environment needs at least 2×1 pixels");
+    if (width != 2 * height)
+        throw Error(ErrorKind::Config, path + ": " + std::to_string(width) + "x" + std::to_string(height) +
+                                           " pixels; an equirectangular environment is twice as wide as high");
     Environment env = Environment::image(width, height, std::move(pixels), strength, rotationRadians);
     if (env.black()) throw Error(ErrorKind::Config, path + ": the environment image is black");
     return env;
