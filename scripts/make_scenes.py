@@ -682,6 +682,57 @@ WIN_Z0, WIN_Z1, WIN_Y0, WIN_Y1 = -1.6, -0.4, 0.9, 2.1  # window in the left wall
 WIN_DEPTH = 0.2                            # the wall's thickness at the window
 
 
+def box_maker(g):
+    """box(name, material, lo, hi): an axis-aligned box node from corner lo to corner hi, one
+    unit-cube mesh a material, instanced."""
+    cube = unit_cube()
+    meshes = {}
+
+    def box(name, material, lo, hi):
+        if material not in meshes:
+            meshes[material] = g.mesh("cube_%d" % material, cube, material)
+        g.node(name, mesh=meshes[material],
+               t=tuple((a + b) / 2 for a, b in zip(lo, hi)),
+               s=tuple(b - a for a, b in zip(lo, hi)))
+    return box
+
+
+def quad_node(g, name, geom, material, **fields):
+    return g.node(name, mesh=g.mesh(name, geom, material), **fields)
+
+
+def windowed_room(g, half_x, height, half_z, window, depth, floor, ceiling, wall, trim):
+    """The shell of a room x in [-half_x, half_x], z in [-half_z, half_z], y in [0, height],
+    normals into the room; the left wall (x = -half_x) less a window (z0, z1, y0, y1) whose
+    reveal is a tunnel `depth` deep. Returns the window's centre (y, z) and half sizes (y, z)."""
+    z0, z1, y0, y1 = window
+    quad_node(g, "floor", rect((0, 0, 0), mul(X, half_x), mul(Z, half_z), Y), floor)
+    quad_node(g, "ceiling", rect((0, height, 0), mul(X, half_x), mul(Z, half_z),
+                                 mul(Y, -1)), ceiling)
+    quad_node(g, "back_wall", rect((0, height / 2, -half_z), mul(X, half_x),
+                                   mul(Y, height / 2), Z), wall)
+    quad_node(g, "front_wall", rect((0, height / 2, half_z), mul(X, half_x),
+                                    mul(Y, height / 2), mul(Z, -1)), wall)
+    quad_node(g, "right_wall", rect((half_x, height / 2, 0), mul(Y, height / 2),
+                                    mul(Z, half_z), mul(X, -1)), wall)
+
+    def left_piece(za, zb, ya, yb):
+        return rect((-half_x, (ya + yb) / 2, (za + zb) / 2),
+                    mul(Y, (yb - ya) / 2), mul(Z, (zb - za) / 2), X)
+    quad_node(g, "left_wall", merge(
+        left_piece(-half_z, z0, 0, height), left_piece(z1, half_z, 0, height),
+        left_piece(z0, z1, 0, y0), left_piece(z0, z1, y1, height)), wall)
+    xr = -half_x - depth / 2
+    hz, hy, hd = (z1 - z0) / 2, (y1 - y0) / 2, depth / 2
+    zc, yc = (z0 + z1) / 2, (y0 + y1) / 2
+    quad_node(g, "window_reveal", merge(
+        rect((xr, y0, zc), mul(X, hd), mul(Z, hz), Y),
+        rect((xr, y1, zc), mul(X, hd), mul(Z, hz), mul(Y, -1)),
+        rect((xr, yc, z0), mul(X, hd), mul(Y, hy), Z),
+        rect((xr, yc, z1), mul(X, hd), mul(Y, hy), mul(Z, -1))), trim)
+    return (yc, zc), (hy, hz)
+
+
 def interior(outdir):
     g = GltfBuilder("interior")
     wall = g.material("wall", (0.7, 0.68, 0.62))
@@ -696,47 +747,15 @@ def interior(outdir):
                      strength=12.0)
     lamp = g.material("lamp", (0.0, 0.0, 0.0), emissive=LIGHT_RGB,
                       strength=30.0)
-    cube = unit_cube()
-    meshes = {}
-
-    def box(name, material, lo, hi):
-        """An axis-aligned box from corner lo to corner hi."""
-        if material not in meshes:
-            meshes[material] = g.mesh("cube_%d" % material, cube, material)
-        g.node(name, mesh=meshes[material],
-               t=tuple((a + b) / 2 for a, b in zip(lo, hi)),
-               s=tuple(b - a for a, b in zip(lo, hi)))
+    box = box_maker(g)
 
     def quad(name, geom, material):
-        g.node(name, mesh=g.mesh(name, geom, material))
+        quad_node(g, name, geom, material)
 
     # The shell, normals into the room; the left wall less the window, whose
     # reveal is a short tunnel ending in the sky.
-    quad("floor", rect((0, 0, 0), mul(X, IN_X), mul(Z, IN_Z), Y), floor)
-    quad("ceiling", rect((0, IN_H, 0), mul(X, IN_X), mul(Z, IN_Z),
-                         mul(Y, -1)), ceiling)
-    quad("back_wall", rect((0, IN_H / 2, -IN_Z), mul(X, IN_X),
-                           mul(Y, IN_H / 2), Z), wall)
-    quad("front_wall", rect((0, IN_H / 2, IN_Z), mul(X, IN_X),
-                            mul(Y, IN_H / 2), mul(Z, -1)), wall)
-    quad("right_wall", rect((IN_X, IN_H / 2, 0), mul(Y, IN_H / 2),
-                            mul(Z, IN_Z), mul(X, -1)), wall)
-
-    def left_piece(z0, z1, y0, y1):
-        return rect((-IN_X, (y0 + y1) / 2, (z0 + z1) / 2),
-                    mul(Y, (y1 - y0) / 2), mul(Z, (z1 - z0) / 2), X)
-    quad("left_wall", merge(
-        left_piece(-IN_Z, WIN_Z0, 0, IN_H), left_piece(WIN_Z1, IN_Z, 0, IN_H),
-        left_piece(WIN_Z0, WIN_Z1, 0, WIN_Y0),
-        left_piece(WIN_Z0, WIN_Z1, WIN_Y1, IN_H)), wall)
-    xr = -IN_X - WIN_DEPTH / 2
-    hz, hy, hd = (WIN_Z1 - WIN_Z0) / 2, (WIN_Y1 - WIN_Y0) / 2, WIN_DEPTH / 2
-    zc, yc = (WIN_Z0 + WIN_Z1) / 2, (WIN_Y0 + WIN_Y1) / 2
-    quad("window_reveal", merge(
-        rect((xr, WIN_Y0, zc), mul(X, hd), mul(Z, hz), Y),
-        rect((xr, WIN_Y1, zc), mul(X, hd), mul(Z, hz), mul(Y, -1)),
-        rect((xr, yc, WIN_Z0), mul(X, hd), mul(Y, hy), Z),
-        rect((xr, yc, WIN_Z1), mul(X, hd), mul(Y, hy), mul(Z, -1))), trim)
+    (yc, zc), (hy, hz) = windowed_room(g, IN_X, IN_H, IN_Z, (WIN_Z0, WIN_Z1, WIN_Y0, WIN_Y1),
+                                       WIN_DEPTH, floor, ceiling, wall, trim)
     quad("sky", rect((-IN_X - WIN_DEPTH, yc, zc), mul(Y, hy), mul(Z, hz), X),
          sky)
     # Window bars: a mullion and a transom, 4 cm.
@@ -865,42 +884,12 @@ def daylight(outdir):
     m["alphaMode"] = "MASK"
     m["alphaCutoff"] = 0.5
     m["doubleSided"] = True
-    cube = unit_cube()
-    meshes = {}
-
-    def box(name, material, lo, hi):
-        if material not in meshes:
-            meshes[material] = g.mesh("cube_%d" % material, cube, material)
-        g.node(name, mesh=meshes[material],
-               t=tuple((a + b) / 2 for a, b in zip(lo, hi)),
-               s=tuple(b - a for a, b in zip(lo, hi)))
-
-    def quad(name, geom, material, **fields):
-        g.node(name, mesh=g.mesh(name, geom, material), **fields)
-
-    quad("floor", rect((0, 0, 0), mul(X, DAY_X), mul(Z, DAY_Z), Y), floor)
-    quad("ceiling", rect((0, DAY_H, 0), mul(X, DAY_X), mul(Z, DAY_Z), mul(Y, -1)), ceiling)
-    quad("back_wall", rect((0, DAY_H / 2, -DAY_Z), mul(X, DAY_X), mul(Y, DAY_H / 2), Z), wall)
-    quad("front_wall", rect((0, DAY_H / 2, DAY_Z), mul(X, DAY_X), mul(Y, DAY_H / 2), mul(Z, -1)), wall)
-    quad("right_wall", rect((DAY_X, DAY_H / 2, 0), mul(Y, DAY_H / 2), mul(Z, DAY_Z), mul(X, -1)), wall)
-
-    def left_piece(z0, z1, y0, y1):
-        return rect((-DAY_X, (y0 + y1) / 2, (z0 + z1) / 2), mul(Y, (y1 - y0) / 2), mul(Z, (z1 - z0) / 2), X)
-    quad("left_wall", merge(
-        left_piece(-DAY_Z, DAY_WIN_Z0, 0, DAY_H), left_piece(DAY_WIN_Z1, DAY_Z, 0, DAY_H),
-        left_piece(DAY_WIN_Z0, DAY_WIN_Z1, 0, DAY_WIN_Y0),
-        left_piece(DAY_WIN_Z0, DAY_WIN_Z1, DAY_WIN_Y1, DAY_H)), wall)
-    xr = -DAY_X - DAY_WIN_DEPTH / 2
-    hz, hy, hd = (DAY_WIN_Z1 - DAY_WIN_Z0) / 2, (DAY_WIN_Y1 - DAY_WIN_Y0) / 2, DAY_WIN_DEPTH / 2
-    zc, yc = (DAY_WIN_Z0 + DAY_WIN_Z1) / 2, (DAY_WIN_Y0 + DAY_WIN_Y1) / 2
-    quad("window_reveal", merge(
-        rect((xr, DAY_WIN_Y0, zc), mul(X, hd), mul(Z, hz), Y),
-        rect((xr, DAY_WIN_Y1, zc), mul(X, hd), mul(Z, hz), mul(Y, -1)),
-        rect((xr, yc, DAY_WIN_Z0), mul(X, hd), mul(Y, hy), Z),
-        rect((xr, yc, DAY_WIN_Z1), mul(X, hd), mul(Y, hy), mul(Z, -1))), trim)
+    box = box_maker(g)
+    (yc, zc), (hy, hz) = windowed_room(g, DAY_X, DAY_H, DAY_Z, (DAY_WIN_Z0, DAY_WIN_Z1, DAY_WIN_Y0, DAY_WIN_Y1),
+                                       DAY_WIN_DEPTH, floor, ceiling, wall, trim)
     # The opening's outer face is the light portal: the sun's and the sky's photons enter there.
-    quad("window_portal", rect((-DAY_X - DAY_WIN_DEPTH, yc, zc), mul(Y, hy), mul(Z, hz), X), trim,
-         extras={"raysplat_portal": True})
+    quad_node(g, "window_portal", rect((-DAY_X - DAY_WIN_DEPTH, yc, zc), mul(Y, hy), mul(Z, hz), X), trim,
+              extras={"raysplat_portal": True})
     # A blind of 9 slats, 1 cm thick and 5 cm deep, 11 cm apart: the sun comes in stripes.
     for i in range(9):
         y = DAY_WIN_Y0 + 0.06 + i * 0.11

@@ -28,17 +28,6 @@ RenderConfig sampledConfig(int width) {
     return cfg;
 }
 
-Camera lookAt(Vec3 from, Vec3 to, Vec3 up, float yfov) {
-    Camera c;
-    c.position = from;
-    c.forward = glm::normalize(to - from);
-    c.right = glm::normalize(glm::cross(c.forward, up));
-    c.up = glm::cross(c.right, c.forward);
-    c.yfov = yfov;
-    c.aspect = 1.f;
-    return c;
-}
-
 double mean(const std::vector<Vec3>& px) {
     double s = 0.0;
     for (const Vec3& v : px) s += double(v.x) + v.y + v.z;

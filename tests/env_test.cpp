@@ -45,17 +45,6 @@ Vec3 blenderDirection(float u, float v) {
     return {b.x, b.z, -b.y};
 }
 
-Camera lookAt(Vec3 from, Vec3 to, Vec3 up, float yfov) {
-    Camera c;
-    c.position = from;
-    c.forward = glm::normalize(to - from);
-    c.right = glm::normalize(glm::cross(c.forward, up));
-    c.up = glm::cross(c.right, c.forward);
-    c.yfov = yfov;
-    c.aspect = 1.f;
-    return c;
-}
-
 // A 40 m floor (ρ = 0.5) seen from 1 m above, looking down: no pixel sees past it.
 Scene openFloor() {
     Scene s;

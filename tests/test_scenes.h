@@ -130,6 +130,18 @@ inline uint32_t addMaterial(Scene& s, MaterialKind kind, Vec3 baseColor, Vec3 em
     return uint32_t(s.materials.size() - 1);
 }
 
+// A camera at `from` looking at `to`, square, of vertical field `yfov` (radians).
+inline Camera lookAt(Vec3 from, Vec3 to, Vec3 up, float yfov) {
+    Camera c;
+    c.position = from;
+    c.forward = glm::normalize(to - from);
+    c.right = glm::normalize(glm::cross(c.forward, up));
+    c.up = glm::cross(c.right, c.forward);
+    c.yfov = yfov;
+    c.aspect = 1.f;
+    return c;
+}
+
 // Renders `cfg` with 1 and with 2 threads and expects every light layer bit-identical;
 // returns the one-thread result.
 inline RenderResult expectSamePixelsWhateverTheThreadCount(const Scene& scene, RenderConfig cfg) {
