@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU check, for a session that has the accelerator machine: builds, reports the EGL device
+# The GPU check, for a machine with a GPU: builds, reports the EGL device
 # the voxelizer gets, checks the GPU voxelizer exactly against the CPU voxelizer on every data/
 # scene (grid 96) and on the teapot (grid 256), and times both voxelizers on the glossy box
 # (192³) and the teapot (256³), medians of 3.

@@ -8,7 +8,7 @@
 #   scripts/run.sh build    install what is missing and build (build/raysplat)
 #   scripts/run.sh study    also install python3-venv and libLLVM 19 (for Mitsuba's LLVM
 #                           variant), build, and run the quality study (scripts/study.py),
-#                           which writes docs/results/ and the README's Results section
+#                           which writes docs/results/ and docs/results.md
 #   scripts/run.sh sanitize also install clang 14, build build-san/ with AddressSanitizer and
 #                           UndefinedBehaviorSanitizer, and run the test suite there (CI runs
 #                           it after `test`). tests/sanitizers/ubsan.supp lists what is

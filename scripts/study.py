@@ -4,7 +4,7 @@
   python3 scripts/study.py [--build build] [--out out/study] [--size 256]
                            [--passes 1,2,4,8,16] [--reuse]
                            [--reference-spp 2048] [--mitsuba-spp 1024]
-                           [--readme README.md | --no-readme] [--results DIR] [SCENE ...]
+                           [--readme docs/results.md | --no-readme] [--results DIR] [SCENE ...]
 
 (`scripts/run.sh study` installs what is missing, builds, and runs this.)
 
@@ -24,7 +24,7 @@ For each scene (default: every scene of data/):
      bias.
 It writes a plot of relative MSE against time, Table-1-style tables, the layers of the
 paper's Fig. 5 (direct / indirect / caustic / beauty) and the shadow contrast of its Fig. 4
-into docs/results/, and the README's Results section between its `results:begin` and
+into docs/results/, and docs/results.md between its `results:begin` and
 `results:end` markers. Times are wall-clock seconds of one `raysplat render` each (load and
 voxelization included), on however many cores the machine has; each render is
 deterministic, so only its time varies between runs.
@@ -421,7 +421,8 @@ def bias_summary(res):
 
 
 def results_markdown(results, machine, args, plot_png, pictures):
-    rel = lambda p: os.path.relpath(p, studyutil.ROOT)  # noqa: E731
+    here = os.path.dirname(os.path.abspath(args.readme))  # links relative to the page written
+    rel = lambda p: os.path.relpath(p, here)  # noqa: E731
     passes = ", ".join(str(p) for p in args.passes)
     out = [f"Measured by `scripts/run.sh study` (`scripts/study.py`) on {machine['date']}: {machine['cpu']}, "
            f"{machine['threads']} hardware threads, {machine['os']}, raysplat commit {machine['commit']}. "
@@ -518,8 +519,9 @@ def main():
                     help="pass counts for raysplat at its defaults, comma-separated (default 1,2,4,8,16)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse the timed renders of an earlier run (with their times) to redo the report")
-    ap.add_argument("--readme", default=os.path.join(studyutil.ROOT, "README.md"), help="README to update")
-    ap.add_argument("--no-readme", action="store_true", help="leave the README alone")
+    ap.add_argument("--readme", default=os.path.join(studyutil.ROOT, "docs", "results.md"),
+                    help="the page whose results section is rewritten")
+    ap.add_argument("--no-readme", action="store_true", help="leave that page alone")
     ap.add_argument("--results", default=os.path.join(studyutil.ROOT, RESULTS_DIR),
                     help="directory for the published pictures (default docs/results)")
     args = ap.parse_args()
