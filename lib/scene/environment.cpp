@@ -46,33 +46,33 @@ Environment Environment::image(int width, int height, std::vector<Vec3> pixels, 
     e.cosRot_ = std::cos(rotationRadians);
     e.sinRot_ = std::sin(rotationRadians);
 
+    // Weights luminance × sin θ of the pixel's centre; rows by their sums, columns within a row.
+    e.weight_.resize(e.pixels_.size());
     e.rowCdf_.assign(size_t(height) + 1, 0.0);
     e.columnCdf_.assign(size_t(height) * (width + 1), 0.f);
-    std::vector<double> rowSum(size_t(width) + 1);
     DVec3 integral(0.0);
     for (int y = 0; y < height; ++y) {
         const double sinCentre = std::sin(kPi * (y + 0.5) / height);
         // The solid angle of one pixel of this row: 2π/W · (cos θ0 − cos θ1).
         const double omega = 2.0 * kPi / width * (std::cos(kPi * y / height) - std::cos(kPi * (y + 1.0) / height));
+        float* w = &e.weight_[size_t(y) * width];
+        double rowSum = 0.0;
         for (int x = 0; x < width; ++x) {
             const Vec3& L = e.pixels_[size_t(y) * width + x];
             integral += DVec3(L) * omega;
-            rowSum[x + 1] = rowSum[x] + double(luminance(L)) * sinCentre;
+            w[x] = float(double(luminance(L)) * sinCentre);
+            rowSum += w[x];
         }
-        e.rowCdf_[y + 1] = e.rowCdf_[y] + rowSum[width];
+        e.rowCdf_[y + 1] = e.rowCdf_[y] + rowSum;
         float* cdf = &e.columnCdf_[size_t(y) * (width + 1)];
-        for (int x = 1; x <= width && rowSum[width] > 0.0; ++x) cdf[x] = float(rowSum[x] / rowSum[width]);
+        double acc = 0.0;
+        for (int x = 0; x < width && rowSum > 0.0; ++x) cdf[x + 1] = float((acc += w[x]) / rowSum);
     }
     e.total_ = e.rowCdf_[height];
     e.integral_ = Vec3(integral);
     if (e.total_ > 0.0) {
         for (double& c : e.rowCdf_) c /= e.total_;
-        e.weight_.resize(e.pixels_.size());
-        for (int y = 0; y < height; ++y) {
-            const double sinCentre = std::sin(kPi * (y + 0.5) / height);
-            for (int x = 0; x < width; ++x)
-                e.weight_[size_t(y) * width + x] = float(double(luminance(e.pixels_[size_t(y) * width + x])) * sinCentre / e.total_);
-        }
+        for (float& w : e.weight_) w = float(double(w) / e.total_);
     }
     return e;
 }

@@ -30,8 +30,8 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PunctualLight& l = scene.lights[i];
         float power = l.power(luminance(l.intensity), sceneRadius_);
-        if (l.type == LightType::Directional && hasPortals() && portalArea(l.direction) > 0.f)
-            power = luminance(l.intensity) * portalArea(l.direction);
+        const float area = l.type == LightType::Directional ? portalArea(l.direction) : 0.f;
+        if (area > 0.f) power = luminance(l.intensity) * area;
         if (power > 0.f) entries_.push_back({Kind::Punctual, uint32_t(i), power});
     }
     if (environment && !environment->black()) {
