@@ -24,6 +24,7 @@
 #include "memory.h"
 #include "mpi_ranks.h"
 #include "options.h"
+#include "reporters.h"
 #include "render.h"
 #include "scene/scene.h"
 #include "core/stats.h"
@@ -31,133 +32,9 @@
 
 using namespace rs;
 using rs::cli::Command;
+using rs::cli::withFlags;
 
 namespace {
-
-// The library names settings in backticks (`spp`); on the command line they are flags, spelt
-// the same with two dashes (the output file: -o).
-std::string withFlags(const std::string& message) {
-    std::string out;
-    for (size_t i = 0; i < message.size(); ++i) {
-        const size_t end = message[i] == '`' ? message.find('`', i + 1) : std::string::npos;
-        if (end == std::string::npos) {
-            out += message[i];
-            continue;
-        }
-        const std::string name = message.substr(i + 1, end - i - 1);
-        out += name == "output" ? "-o" : "--" + name;
-        i = end;
-    }
-    return out;
-}
-
-// -- Console reporter: a progress bar on a TTY, plain lines otherwise, nothing with --quiet.
-// Stages may nest one level: the render's passes are the outer stage, each pass's stages
-// (eye pass, photons, splatting) the inner one; the bar then shows both, and only the
-// outer stage prints lines.
-class ConsoleReporter : public Reporter {
-public:
-    explicit ConsoleReporter(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO)) {}
-
-    void info(const std::string& m) override {
-        if (quiet_) return;
-        std::lock_guard<std::mutex> lock(mutex_);
-        clearBar();
-        std::fprintf(stderr, "raysplat: %s\n", withFlags(m).c_str());
-    }
-    void warn(const std::string& m) override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        clearBar();
-        std::fprintf(stderr, "raysplat: warning: %s\n", withFlags(m).c_str());
-    }
-    void begin(const std::string& stage, int64_t total, const char* unit) override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        const bool nested = depth_ == 1;
-        depth_ = std::min(depth_ + 1, 2);
-        Progress& p = nested ? inner_ : outer_;
-        p.start(stage, total, unit);
-        if (nested) outer_.hasInner = true;
-        if (!quiet_ && !tty_ && !nested) {
-            if (total > 0) std::fprintf(stderr, "raysplat: %s: %lld %s\n", stage.c_str(), (long long)total, unit);
-            else std::fprintf(stderr, "raysplat: %s\n", stage.c_str());
-        }
-    }
-    void advance(int64_t units) override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        Progress& p = depth_ == 2 ? inner_ : outer_;
-        p.done += units;
-        if (quiet_) return;
-        if (!tty_) {
-            if (depth_ == 1 && p.hasInner)  // a line per unit of work made of stages
-                std::fprintf(stderr, "raysplat: %s: pass %lld%s done, %.1f s\n", p.stage.c_str(), (long long)p.done,
-                             p.total > 0 ? fmtTotal(p.total).c_str() : "", p.timer.seconds());
-            return;
-        }
-        double now = outer_.timer.seconds();
-        if (now - lastDraw_ < 0.1 && p.done < p.total) return;
-        lastDraw_ = now;
-        drawBar();
-    }
-    void end() override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        const bool nested = depth_ == 2;
-        depth_ = std::max(depth_ - 1, 0);
-        if (quiet_ || nested) return;
-        clearBar();
-        std::fprintf(stderr, "raysplat: %s done in %.2f s\n", outer_.stage.c_str(), outer_.timer.seconds());
-    }
-
-private:
-    struct Progress {
-        std::string stage;
-        const char* unit = "";
-        int64_t total = 0, done = 0;  // total 0: open-ended (passes under a time limit)
-        bool hasInner = false;        // stages ran inside it
-        Timer timer;
-        void start(const std::string& s, int64_t t, const char* u) {
-            stage = s, unit = u, total = t, done = 0, hasInner = false, timer = Timer();
-        }
-        double fraction() const { return total > 0 ? std::min(1.0, double(done) / double(total)) : 0.0; }
-    };
-    static std::string fmtTotal(int64_t total) { return "/" + std::to_string(total); }
-
-    void drawBar() {
-        const int width = 30;
-        const Progress& o = outer_;
-        std::string line = "\r\033[Kraysplat: " + o.stage;
-        char buf[256];
-        if (o.total > 0) {
-            // The outer bar counts the current unit's inner progress as a fraction of one unit.
-            double f = std::min(1.0, (double(o.done) + (depth_ == 2 ? inner_.fraction() : 0.0)) / double(o.total));
-            int fill = int(f * width);
-            double eta = f > 0.0 ? o.timer.seconds() * (1.0 - f) / f : 0.0;
-            std::snprintf(buf, sizeof buf, " [%.*s%*s] %3d%% %lld/%lld %s, %.1f s left", fill,
-                          "##############################", width - fill, "", int(f * 100), (long long)o.done,
-                          (long long)o.total, o.unit, eta);
-        } else {
-            std::snprintf(buf, sizeof buf, " %lld %s, %.1f s", (long long)o.done, o.unit, o.timer.seconds());
-        }
-        line += buf;
-        if (depth_ == 2) {
-            std::snprintf(buf, sizeof buf, " · %s %3d%%", inner_.stage.c_str(), int(inner_.fraction() * 100));
-            line += buf;
-        }
-        std::fputs(line.c_str(), stderr);
-        std::fflush(stderr);
-        barShown_ = true;
-    }
-    void clearBar() {
-        if (barShown_) std::fprintf(stderr, "\r\033[K");
-        barShown_ = false;
-    }
-
-    bool quiet_, tty_;
-    std::mutex mutex_;
-    int depth_ = 0;
-    Progress outer_, inner_;
-    double lastDraw_ = -1.0;
-    bool barShown_ = false;
-};
 
 const char* kTopHelp =
     "usage: raysplat <command> [options]\n"
@@ -184,15 +61,32 @@ std::string fmt(const char* f, ...) {
 
 std::string vec(const Vec3& v) { return fmt("(%.4g, %.4g, %.4g)", v.x + 0.f, v.y + 0.f, v.z + 0.f); }  // no "-0"
 
+// The render's defaults, for programs that set some options and want to show the rest (the
+// Blender add-on): read from RenderConfig, so that they are written once.
+std::string defaultsJson() {
+    RenderConfig splat, path;
+    path.method = Method::Path;
+    return fmt("{\"method\": \"%s\", \"width\": %d, \"passes\": {\"splat\": %d, \"path\": %d}, "
+               "\"spp\": {\"splat\": %d, \"path\": %d}, \"direct_spp\": %d, \"light_samples\": %d, "
+               "\"photons\": %lld, \"grid\": %d, \"threads\": %d, \"seed\": %llu, \"time_limit\": %g}\n",
+               methodName(splat.method), splat.width, splat.passCount(), path.passCount(), splat.samplesPerPixel(),
+               path.samplesPerPixel(), splat.directSpp, splat.lightSamples, (long long)splat.photons, splat.grid,
+               splat.threads, (unsigned long long)splat.seed, splat.timeLimit);
+}
+
 // Under mpirun every rank renders its part (lib/ranks.h); rank 0 alone reports and writes.
 int cmdRender(int argc, char** argv, Ranks& ranks) {
     cli::Arguments args = cli::parseRender(argc, argv);
     if (args.help) return 0;
+    if (args.defaults) {
+        if (ranks.rank() == 0) std::fputs(defaultsJson().c_str(), stdout);
+        return 0;
+    }
     RenderConfig& cfg = args.cfg;
     const bool root = ranks.rank() == 0;
     if (!root) cfg.vdb.clear();
-    ConsoleReporter console(args.quiet);
-    Reporter& reporter = root ? console : silentReporter();
+    std::unique_ptr<Reporter> console = cli::makeReporter(args.quiet, args.json);
+    Reporter& reporter = root ? *console : silentReporter();
     Timer load;
     Scene scene = loadScene(cfg.scene, reporter);
     double loadSeconds = load.seconds();
@@ -204,6 +98,7 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
     std::string ranksNote = ranks.size() > 1 ? fmt(", %d ranks", ranks.size()) : "";
     reporter.info(fmt("wrote %s (%dx%d, %s, %.2f s%s)", cfg.output.c_str(), result.film.width, result.film.height,
                       methodName(cfg.method), result.stats.totalSeconds(), ranksNote.c_str()));
+    if (root) cli::reportDone(args.json, cfg.output, result.stats.totalSeconds());
     return 0;
 }
 
@@ -215,8 +110,8 @@ int cmdInfo(int argc, char** argv) {
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
     if (help) return 0;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "info needs exactly one SCENE (see raysplat info --help)");
-    ConsoleReporter reporter(false);
-    Scene s = loadScene(pos[0], reporter);
+    std::unique_ptr<Reporter> reporter = cli::makeReporter(false, false);
+    Scene s = loadScene(pos[0], *reporter);
 
     std::map<std::string, int> kinds;
     std::vector<size_t> trisOf(s.materials.size(), 0);
@@ -262,7 +157,8 @@ int cmdVoxelize(int argc, char** argv) {
     cli::Arguments args = cli::parseVoxelize(argc, argv);
     if (args.help) return 0;
     const RenderConfig& cfg = args.cfg;
-    ConsoleReporter reporter(args.quiet);
+    std::unique_ptr<Reporter> console = cli::makeReporter(args.quiet, args.json);
+    Reporter& reporter = *console;
     Scene scene = loadScene(cfg.scene, reporter);
     const IVec3 dims = gridForBounds(scene.bounds, cfg.grid).dims;
     const int gridDims[3] = {dims.x, dims.y, dims.z};
@@ -281,6 +177,7 @@ int cmdVoxelize(int argc, char** argv) {
                       g.dims.y, g.dims.z, g.voxelSize, occupied,
                       100.0 * double(occupied) / double(std::max<size_t>(g.voxelCount(), 1)), stats.time("voxelize"),
                       cacheHit ? " (from the cache)" : ""));
+    cli::reportDone(args.json, cfg.vdb, stats.time("voxelize"));
     return 0;
 }
 

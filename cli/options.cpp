@@ -93,8 +93,16 @@ void addGridOptions(Command& cmd, RenderConfig& cfg) {
              [&](const std::string& v) { cfg.maxMemory = parseSize("--max-memory", v); }});
 }
 
-void addQuietOption(Command& cmd, bool& quiet) {
-    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { quiet = true; }});
+void addQuietOption(Command& cmd, Arguments& args) {
+    cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { args.quiet = true; }});
+    cmd.add({"--progress", "FORMAT",
+             "text (default: a bar on a terminal, else lines), json (one JSON object a line on stderr: "
+             "{\"event\": \"begin\"|\"progress\"|\"end\"|\"info\"|\"warning\"|\"done\", ...}, for programs; "
+             "an error stays the one line 'raysplat: error: ...')",
+             [&](const std::string& v) {
+                 if (v != "text" && v != "json") throw Error(ErrorKind::Config, "--progress " + v + ": unknown format (text, json)");
+                 args.json = v == "json";
+             }});
 }
 
 }  // namespace
@@ -205,9 +213,15 @@ Arguments parseRender(int argc, char** argv) {
     addGridOptions(cmd, cfg);
     cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
              [&](const std::string& v) { cfg.vdb = v; }});
-    addQuietOption(cmd, args.quiet);
+    cmd.add({"--blender-layer", "NAME",
+             "name the EXR's channels as Blender's multilayer EXR of view layer NAME: NAME.Combined.RGBA, NAME.Direct.RGB, "
+             "... NAME.Albedo.RGB, NAME.Normal.XYZ (Blender's axes), which Blender opens as passes",
+             [&](const std::string& v) { cfg.blenderLayer = v; }});
+    addQuietOption(cmd, args);
+    cmd.add({"--defaults", "", "print the defaults of the settings above as one JSON object, and exit",
+             [&](const std::string&) { args.defaults = true; }});
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, args.help);
-    if (args.help) return args;
+    if (args.help || args.defaults) return args;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "render needs exactly one SCENE (see raysplat render --help)");
     cfg.scene = pos[0];
     cfg.validate();
@@ -227,7 +241,7 @@ Arguments parseVoxelize(int argc, char** argv) {
     addGridOptions(cmd, cfg);
     cmd.add({"--threads", "N", "worker threads of the CPU voxelizer (default 0: every core this process may run on); the grid does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    addQuietOption(cmd, args.quiet);
+    addQuietOption(cmd, args);
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, args.help);
     if (args.help) return args;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "voxelize needs exactly one SCENE (see raysplat voxelize --help)");

@@ -59,7 +59,9 @@ private:
 struct Arguments {
     RenderConfig cfg;
     bool quiet = false;
-    bool help = false;  // --help was given and printed: nothing else to do
+    bool json = false;      // --progress json: progress and messages as JSON lines on stderr
+    bool help = false;      // --help was given and printed: nothing else to do
+    bool defaults = false;  // render --defaults: print the defaults as JSON, nothing else
 };
 Arguments parseRender(int argc, char** argv);
 Arguments parseVoxelize(int argc, char** argv);

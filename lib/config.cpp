@@ -98,6 +98,8 @@ void RenderConfig::validate() const {
     if (!env.empty() && !isBlack(sky)) throw Error(ErrorKind::Config, "`env` and `sky` both give an environment: choose one");
     std::error_code envError;
     if (!env.empty() && !std::filesystem::is_regular_file(env, envError)) throw Error(ErrorKind::Io, env + ": no such file");
+    if (blenderLayer.find_first_of(".\n") != std::string::npos)
+        throw Error(ErrorKind::Config, "`blender-layer` '" + blenderLayer + "' names a view layer: no '.' in it");
     validateGrid();
     if (output.empty()) throw Error(ErrorKind::Config, "no output file: give `output` FILE.exr");
     // Refuse before rendering, not after: every output's directory must exist.

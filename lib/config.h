@@ -68,6 +68,9 @@ struct RenderConfig {
     // Kernel shrinkage between passes (Knaus & Zwicker 2011): r²(i+1) = r²(i)·(i + α)/(i + 1).
     float alpha = 2.f / 3.f;
     float exposure = 0.f;    // PNG preview, stops
+    // Non-empty: the EXR's channels are named as Blender's multilayer EXR of this view layer
+    // (writeExrTo), as the Blender add-on loads them.
+    std::string blenderLayer;
 
     // The environment light (docs/design.md §4): an equirectangular OpenEXR `env` in Blender's
     // world orientation, times `envStrength`, turned `envRotation` degrees about the up axis as

@@ -330,7 +330,7 @@ void writeOutputs(RenderResult& result, const RenderConfig& cfg) {
     StagedFiles& out = *result.outputs;
     throwIfStopped();
     writeExrTo(out.stage(cfg.output), cfg.output, result.film, result.attributes,
-               cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads());
+               cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads(), cfg.blenderLayer);
     if (!cfg.png.empty()) writeFileTo(out.stage(cfg.png), cfg.png, encodePng(result.film, cfg.exposure));
     if (!cfg.statsJson.empty()) writeFileTo(out.stage(cfg.statsJson), cfg.statsJson, result.stats.json());
     throwIfStopped();  // the last moment a stop leaves nothing: the renames follow

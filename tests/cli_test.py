@@ -388,6 +388,25 @@ def render_good(scene, out, name, *extra):
     return exr_data, png_data, stats_data
 
 
+def test_progress_json_and_defaults():
+    """--progress json: every stderr line a JSON object, the passes counted up to their total,
+    the last line "done" naming the output; render --defaults is one JSON object."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        exr = os.path.join(out, "p.exr")
+        r = run("render", CORNELL, "-o", exr, "--width", "32", "--passes", "3", "--photons", "5000", "--progress", "json")
+        check(r.returncode == 0, "render --progress json failed: %s" % r.stderr)
+        events = [json.loads(line) for line in r.stderr.splitlines()]
+        passes = [e for e in events if e["event"] == "progress" and "inner" not in e]
+        check([e["done"] for e in passes] == [1, 2, 3] and all(e["total"] == 3 for e in passes),
+              "the passes counted 1, 2, 3 of 3: %s" % passes)
+        check(events[-1] == {"event": "done", "output": exr, "seconds": events[-1]["seconds"]}, "last line: %s" % events[-1])
+        r = run("render", CORNELL, "-o", exr, "--progress", "xml")
+        check(r.returncode == 1 and "--progress xml" in r.stderr, "--progress xml refused: %s" % r.stderr)
+    r = run("render", "--defaults")
+    d = json.loads(r.stdout)
+    check(r.returncode == 0 and d["passes"] == {"splat": 8, "path": 1} and d["photons"] == 100000, "defaults: %s" % r.stdout)
+
+
 def test_good_render_writes_exr_png_and_stats():
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
         exr, png, stats = render_good(CORNELL, out, "cornell", "--width", "32", "--spp", "2",
@@ -570,6 +589,7 @@ def main():
             test_no_arguments_prints_usage_and_exits_2,
             test_help_of_each_command,
             test_good_render_writes_exr_png_and_stats,
+            test_progress_json_and_defaults,
             test_one_and_two_threads_give_identical_pixels,
         )]
         for name, test in tests:

@@ -34,7 +34,7 @@ double Stats::totalSeconds() const {
     return t;
 }
 
-static std::string jsonString(const std::string& s) {
+std::string jsonString(const std::string& s) {
     std::string out = "\"";
     for (char c : s) {
         if (c == '"' || c == '\\') { out += '\\'; out += c; }

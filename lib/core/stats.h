@@ -10,6 +10,9 @@ namespace rs {
 
 constexpr double kMB = 1024.0 * 1024.0;  // bytes in the *_mb counts
 
+// `s` as a JSON string literal, quotes included.
+std::string jsonString(const std::string& s);
+
 struct Stats {
     std::vector<std::pair<std::string, double>> seconds;  // stage → wall time, in order
     std::vector<std::pair<std::string, double>> counts;   // name → value, in order

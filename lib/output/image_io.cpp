@@ -11,6 +11,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 
 #include "core/error.h"
@@ -18,26 +19,43 @@
 namespace rs {
 
 void writeExrTo(const std::string& tmp, const std::string& path, const Film& film, const ImageAttributes& attributes,
-                int threads) {
+                int threads, const std::string& blenderLayer) {
+    // Blender's multilayer naming: <view layer>.<Pass>.<channel>, Combined with an alpha of 1 and
+    // the normal as a vector in Blender's axes (glTF +Y up is Blender's +Z up).
+    const bool blender = !blenderLayer.empty();
     std::vector<Vec3> beauty = film.beautyImage();
-    std::vector<std::pair<std::string, const std::vector<Vec3>*>> buffers = {{"", &beauty}};
-    for (int l = 0; l < kLayerCount; ++l) buffers.push_back({std::string(layerName(l)) + ".", &film.layers[l]});
-    buffers.push_back({"albedo.", &film.albedo});
-    buffers.push_back({"normal.", &film.normal});
+    std::vector<Vec3> normal = film.normal;
+    if (blender)
+        for (Vec3& n : normal) n = Vec3(n.x, -n.z, n.y);
+    const std::vector<float> opaque(blender ? film.pixelCount() : 0, 1.f);
+    struct Group {
+        std::string prefix;
+        const char* channels;
+        const float* data;
+        size_t stride;  // floats from one pixel to the next
+    };
+    auto pass = [&](const char* own, std::string name) { return blender ? blenderLayer + "." + name + "." : std::string(own); };
+    std::vector<Group> groups = {{pass("", "Combined"), "RGB", &beauty[0].x, 3}};
+    if (blender) groups.push_back({pass("", "Combined"), "A", opaque.data(), 1});
+    for (int l = 0; l < kLayerCount; ++l) {
+        std::string own = std::string(layerName(l)) + ".", name = layerName(l);
+        name[0] = char(std::toupper(static_cast<unsigned char>(name[0])));
+        groups.push_back({pass(own.c_str(), name), "RGB", &film.layers[l][0].x, 3});
+    }
+    groups.push_back({pass("albedo.", "Albedo"), "RGB", &film.albedo[0].x, 3});
+    groups.push_back({pass("normal.", "Normal"), blender ? "XYZ" : "RGB", &normal[0].x, 3});
 
     try {
         Imf::Header header(film.width, film.height);
         header.compression() = Imf::ZIP_COMPRESSION;
         for (const auto& [key, value] : attributes) header.insert(key, Imf::StringAttribute(value));
         Imf::FrameBuffer fb;
-        const size_t xStride = sizeof(Vec3), yStride = sizeof(Vec3) * size_t(film.width);
-        for (const auto& [prefix, buf] : buffers) {
-            const char* comp[3] = {"R", "G", "B"};
-            for (int c = 0; c < 3; ++c) {
-                std::string name = prefix + comp[c];
+        for (const Group& g : groups) {
+            for (int c = 0; g.channels[c]; ++c) {
+                std::string name = g.prefix + g.channels[c];
                 header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-                char* base = const_cast<char*>(reinterpret_cast<const char*>(buf->data())) + c * sizeof(float);
-                fb.insert(name, Imf::Slice(Imf::FLOAT, base, xStride, yStride));
+                char* base = const_cast<char*>(reinterpret_cast<const char*>(g.data + c));
+                fb.insert(name, Imf::Slice(Imf::FLOAT, base, g.stride * sizeof(float), g.stride * sizeof(float) * size_t(film.width)));
             }
         }
         // Compressing is most of the write (0.4 s of the glossy box's 500×500 on one core);

@@ -26,8 +26,11 @@ ExrImage readExr(const std::string& path);
 std::string encodePng(const Film& film, float exposureStops);
 // Writes beauty R,G,B plus <layer>.R/G/B, albedo.*, normal.* as float channels to `file` as is
 // (the caller stages it: StagedFiles); errors name `path`. The ZIP blocks are compressed on
-// `threads` threads (≥ 1); the file's bytes do not depend on how many.
+// `threads` threads (≥ 1); the file's bytes do not depend on how many. With a `blenderLayer`,
+// the channels are named as Blender's multilayer EXR of that view layer: <layer>.Combined.RGBA
+// (alpha 1), <layer>.Direct.RGB … <layer>.Albedo.RGB, <layer>.Normal.XYZ (in Blender's axes, Z up),
+// which Blender's RenderResult.load_from_file and its image editor read as passes.
 void writeExrTo(const std::string& file, const std::string& path, const Film& film, const ImageAttributes& attributes,
-                int threads = 1);
+                int threads = 1, const std::string& blenderLayer = "");
 
 }  // namespace rs
