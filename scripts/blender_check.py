@@ -98,6 +98,14 @@ class Checks:
             self.failed.append(what)
         return ok
 
+    def finish(self, name):
+        """Prints the verdict; the exit status."""
+        if self.failed:
+            print(f"{name}: FAIL ({len(self.failed)} of {self.count} checks)", flush=True)
+            return FAIL
+        print(f"{name}: PASS ({self.count} checks)", flush=True)
+        return 0
+
 
 def world_bounds_of_meshes(objects):
     import numpy as np
