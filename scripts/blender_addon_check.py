@@ -105,6 +105,21 @@ def exr_channels(path):
     return {name: np.asarray(ch.pixels) for name, ch in OpenEXR.File(str(path), separate_channels=True).parts[0].channels.items()}
 
 
+def raysplat_processes(binary):
+    """Process ids running `binary render` on a scene the add-on exported (from /proc: no pgrep
+    needed; other tests may be rendering at the same time)."""
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        if len(argv) > 2 and argv[0] == binary.encode() and argv[1] == b"render" and b"/raysplat-" in argv[2] \
+                and argv[2].endswith(b"/scene.glb"):
+            found.append(int(pid))
+    return found
+
+
 def main():
     reexec_under_bpy_python(__file__)
     required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
@@ -229,25 +244,22 @@ def main():
     bpy.ops.render.render()
     del engine_cls.test_break
     c.check(set(tmp_root.glob("raysplat-*")) == before, "a cancelled render leaves no temporary folder")
-    leftovers = subprocess.run(["pgrep", "-f", str(glb.parent)], capture_output=True, text=True).stdout.split()
-    c.check(not leftovers, "no raysplat process is left running")
+    c.check(not raysplat_processes(binary), "no raysplat process is left running")
 
     # Errors: a missing binary, a failing command; one line each.
+    def reported(word, what):
+        try:
+            bpy.ops.render.render()
+        except RuntimeError:
+            pass
+        e = raysplat_addon.last_error
+        c.check(e is not None and word in e and "\n" not in e, f"{what} is reported in one line: {e}")
+
     prefs.binary = str(work / "no-such-raysplat")
-    try:
-        bpy.ops.render.render()
-    except RuntimeError:
-        pass
-    c.check(raysplat_addon.last_error is not None and "not found" in raysplat_addon.last_error and "\n" not in raysplat_addon.last_error,
-            f"a missing binary is reported: {raysplat_addon.last_error}")
+    reported("not found", "a missing binary")
     prefs.binary = binary
     s.light_samples = 5000
-    try:
-        bpy.ops.render.render()
-    except RuntimeError:
-        pass
-    c.check(raysplat_addon.last_error is not None and "light-samples" in raysplat_addon.last_error and "\n" not in raysplat_addon.last_error,
-            f"a failing command is reported with its own line: {raysplat_addon.last_error}")
+    reported("light-samples", "a failing command, with its own message,")
     s.light_samples = 0
 
     # The occlusion grid, lined up with the meshes.
