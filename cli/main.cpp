@@ -28,6 +28,7 @@
 #include "render.h"
 #include "scene/scene.h"
 #include "core/stats.h"
+#include "core/simd.h"
 #include "core/stop.h"
 
 using namespace rs;
@@ -141,6 +142,8 @@ int cmdInfo(int argc, char** argv) {
     std::printf("camera      '%s' at %s looking %s, yfov %.1f deg%s\n", c.name.c_str(), vec(c.position).c_str(),
                 vec(c.forward).c_str(), c.yfov * 180.0 / kPi, s.cameras.empty() ? " (none in the file: framing the bounds)" : "");
     std::printf("bounds      %s to %s (m)\n", vec(s.bounds.lo).c_str(), vec(s.bounds.hi).c_str());
+    checkSimdEnvironment();
+    std::printf("simd        %s: the occlusion tree's traversal runs %d lanes wide\n", isaName(traversalIsa()), int(traversalIsa()));
     if (gpu) {
         std::string description;
         try {

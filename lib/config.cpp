@@ -1,5 +1,7 @@
 #include "config.h"
 
+#include "core/simd.h"
+
 #include <cmath>
 #include <filesystem>
 
@@ -63,6 +65,7 @@ static void requireRange(const char* setting, double v, double lo, double hi) {
 }
 
 void RenderConfig::validate() const {
+    checkSimdEnvironment();
     requireRange("width", width, 0, 16384);
     requireRange("height", height, 0, 16384);
     if (width == 0 && height == 0) throw Error(ErrorKind::Config, "`width` and `height` cannot both be 0");

@@ -15,9 +15,10 @@
 #include "splat/coverage.h"
 #include "splat/eye.h"
 #include "grid/grid_stage.h"
-#include "splat/kdtree.h"
+#include "occlusion/kdtree.h"
 #include "scene/lights.h"
 #include "core/parallel.h"
+#include "core/simd.h"
 #include "core/stop.h"
 #include "memory.h"
 #include "ranks.h"
@@ -292,6 +293,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     ThreadPool pool(cfg.threads);
     stats.setCount("threads", pool.size());
     stats.setCount("ranks", ranks.size());
+    stats.setCount("simd_lanes", int(traversalIsa()));  // the occlusion tree traversal's: 4 (sse2) or 16 (avx512)
     stats.setCount("triangles", double(scene.triangleCount()));
     stats.setCount("width", width);
     stats.setCount("height", height);
@@ -316,6 +318,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     result.attributes = cfg.attributes();
     result.attributes["scene"] = scene.path;
     result.attributes["version"] = versionString();
+    result.attributes["simd"] = isaName(traversalIsa());
     if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(stats.count("samples_per_pixel")));
     for (const auto& [stage, s] : stats.seconds) {
         char b[32];

@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "config.h"
-#include "output/staged_files.h"
+#include "core/staged_files.h"
 #include "output/film.h"
 #include "core/log.h"
 #include "ranks.h"

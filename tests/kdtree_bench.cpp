@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <random>
 
-#include "splat/kdtree.h"
-#include "splat/kdtree_traverse.h"
+#include "occlusion/kdtree.h"
+#include "occlusion/kdtree_traverse.h"
 #include "core/stats.h"
 
 using namespace rs;

@@ -10,8 +10,8 @@
 #include <random>
 #include <set>
 
-#include "splat/kdtree.h"
-#include "splat/kdtree_traverse.h"
+#include "occlusion/kdtree.h"
+#include "occlusion/kdtree_traverse.h"
 
 using namespace rs;
 
@@ -562,7 +562,8 @@ Cylinder floorOrFreeCylinder(std::mt19937& rng, IVec3 dims, bool fromFloor, floa
 // length) and on surfaces leaving and meeting walls. The brute-force tests above check
 // whichever path this CPU takes.
 TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
-    if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
+    ScopedTraversalIsa restore(traversalIsa());  // the choice comes back however the test ends
+    if (!setTraversalIsa(Isa::Avx512)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
     std::mt19937 rng(91);
     std::uniform_real_distribution<float> u01(0.f, 1.f);
     ThreadPool pool(2);
@@ -582,7 +583,7 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
             const Cylinder cyl = floorOrFreeCylinder(rng, dims, c % 3 == 0, c % 2 ? 10.f : 3.f);
             std::vector<std::pair<uint32_t, float>> seen[2];
             for (int wide = 0; wide < 2; ++wide) {
-                ASSERT_TRUE(setTraversalWide(wide == 1));
+                ASSERT_TRUE(setTraversalIsa(wide == 1 ? Isa::Avx512 : Isa::Sse2));
                 traverseCylinder(tree, samples, cyl, scratch, [&](uint32_t i, float v) { seen[wide].push_back({i, v}); });
             }
             ASSERT_EQ(seen[0].size(), seen[1].size()) << "scene " << scene << " cylinder " << c;
@@ -595,7 +596,6 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
             visits += seen[0].size();
         }
     }
-    setTraversalWide(true);
     EXPECT_GT(visits, 20000u);  // not vacuous
     EXPECT_GT(partial, 1000u);
     std::printf("  %zu visits (%zu partly occluded) the same on both paths\n", visits, partial);
@@ -606,7 +606,8 @@ TEST(OcclusionTreeTraversal, WideSampleStepGivesTheFourLaneAnswersBitForBit) {
 // alone: the same ranges and the same sweep mask (0 in valid cells, kInvalidCell elsewhere),
 // for axis-aligned, diagonal and random directions and radii from half a voxel to forty.
 TEST(OcclusionTreeTraversal, WideValidCellsAreTheFourLaneOnes) {
-    if (!setTraversalWide(true)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
+    ScopedTraversalIsa restore(traversalIsa());  // the choice comes back however the test ends
+    if (!setTraversalIsa(Isa::Avx512)) GTEST_SKIP() << "this CPU has no AVX-512: only the four-lane path runs here";
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> u01(0.f, 1.f);
     std::normal_distribution<float> gauss;
@@ -626,7 +627,7 @@ TEST(OcclusionTreeTraversal, WideValidCellsAreTheFourLaneOnes) {
         cyl.length = 10.f;
         TraversalScratch scratch[2];
         for (int wide = 0; wide < 2; ++wide) {
-            ASSERT_TRUE(setTraversalWide(wide == 1));
+            ASSERT_TRUE(setTraversalIsa(wide == 1 ? Isa::Avx512 : Isa::Sse2));
             CylinderTraversal traversal(tree, samples, cyl, scratch[wide]);
         }
         ASSERT_EQ(scratch[0].rows.size(), scratch[1].rows.size());
@@ -638,7 +639,6 @@ TEST(OcclusionTreeTraversal, WideValidCellsAreTheFourLaneOnes) {
         rows += scratch[0].rows.size();
         validCells += size_t(std::count(scratch[0].sweep.begin(), scratch[0].sweep.end(), 0.f));
     }
-    setTraversalWide(true);
     EXPECT_GT(rows, 30000u);  // not vacuous
     EXPECT_GT(validCells, 100000u);
 }
@@ -648,6 +648,7 @@ TEST(OcclusionTreeTraversal, WideValidCellsAreTheFourLaneOnes) {
 // the same V to the bit, as one taking them one by one; and each after it was told of it. On
 // every path this CPU has.
 TEST(OcclusionTreeTraversal, VisitorOfListsGetsTheSameVisits) {
+    ScopedTraversalIsa restore(traversalIsa());
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> u01(0.f, 1.f);
     ThreadPool pool(2);
@@ -660,7 +661,7 @@ TEST(OcclusionTreeTraversal, VisitorOfListsGetsTheSameVisits) {
     OcclusionTree tree = buildOcclusionTree(grid, samples, pool);
     size_t visits = 0, lists = 0, partial = 0;
     for (int wide = 0; wide < 2; ++wide) {
-        if (!setTraversalWide(wide == 1)) continue;  // no AVX-512: the four-lane path only
+        if (!setTraversalIsa(wide == 1 ? Isa::Avx512 : Isa::Sse2)) continue;  // no AVX-512: the four-lane path only
         for (int c = 0; c < 60; ++c) {
             const Cylinder cyl = floorOrFreeCylinder(rng, dims, c % 2 == 0, 8.f);
             std::vector<std::pair<uint32_t, float>> single, listed;
@@ -687,7 +688,6 @@ TEST(OcclusionTreeTraversal, VisitorOfListsGetsTheSameVisits) {
             visits += single.size();
         }
     }
-    setTraversalWide(true);
     EXPECT_GT(visits, 10000u);  // not vacuous
     EXPECT_GT(partial, 500u);
     EXPECT_GT(lists, 100u);

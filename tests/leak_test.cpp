@@ -10,7 +10,7 @@
 
 #include "scene/accel.h"
 #include "splat/eye.h"
-#include "splat/kdtree.h"
+#include "occlusion/kdtree.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "splat/photons.h"

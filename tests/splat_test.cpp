@@ -7,7 +7,7 @@
 #include <set>
 
 #include "splat/eye.h"
-#include "splat/kdtree.h"
+#include "occlusion/kdtree.h"
 #include "scene/lights.h"
 #include "core/log.h"
 #include "core/parallel.h"

@@ -1,7 +1,7 @@
 // Stopping a render early. Whoever runs the library (the CLI, on SIGINT or SIGTERM) asks for a
 // stop with requestStop(), which is async-signal-safe; the thread pool checks between chunks,
 // and the stages' own long loops between their steps, and end the render with
-// Error(Interrupted). Outputs are staged (output/staged_files.h), so none is left behind.
+// Error(Interrupted). Outputs are staged (core/staged_files.h), so none is left behind.
 #pragma once
 
 namespace rs {

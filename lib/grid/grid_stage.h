@@ -22,7 +22,7 @@
 #include "core/parallel.h"
 #include "scene/scene.h"
 #include "core/stats.h"
-#include "output/staged_files.h"
+#include "core/staged_files.h"
 
 namespace rs {
 

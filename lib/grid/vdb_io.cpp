@@ -30,7 +30,7 @@
 
 #include "core/error.h"
 #include "core/stop.h"
-#include "output/staged_files.h"
+#include "core/staged_files.h"
 
 #ifndef RAYSPLAT_VERSION
 #define RAYSPLAT_VERSION "dev"

@@ -14,7 +14,7 @@
 #include "core/simd.h"
 #include "output/film.h"
 #include "scene/accel.h"
-#include "splat/kdtree_traverse.h"
+#include "occlusion/kdtree_traverse.h"
 #include "splat/photons.h"
 
 namespace rs {

@@ -30,7 +30,7 @@ for side in a b; do
     rev=$revA; [ $side = b ] && rev=$revB
     tree=$(tree_of $side "$rev")
     if [ -d "$tree/lib/splat" ]; then
-        sources=$(cd "$tree" && ls lib/splat/kdtree*.cpp lib/splat/eye.cpp lib/core/*.cpp lib/grid/occlusion_grid.cpp lib/memory.cpp 2>/dev/null)
+        sources=$(cd "$tree" && ls lib/occlusion/*.cpp lib/splat/kdtree*.cpp lib/splat/eye.cpp lib/core/*.cpp lib/grid/occlusion_grid.cpp lib/memory.cpp 2>/dev/null)
         flat=0
     else  # the layout before lib/ had folders
         sources="lib/kdtree.cpp lib/eye.cpp lib/stats.cpp lib/parallel.cpp lib/log.cpp lib/occlusion_grid.cpp lib/error.cpp"

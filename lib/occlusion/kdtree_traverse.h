@@ -80,24 +80,13 @@
 #endif
 
 #include "core/simd.h"
-#include "splat/eye.h"
-#include "splat/kdtree.h"
+#include "occlusion/eye_samples.h"
+#include "occlusion/kdtree.h"
 
 // The reach test, a brick's candidate occluders and the sweep's reads have sixteen-lane AVX-512
-// paths, chosen at run time (kdtree_traverse_avx512.cpp).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define RS_TRAVERSE_AVX512 1
-#else
-#define RS_TRAVERSE_AVX512 0
-#endif
+// paths (kdtree_traverse_avx512.cpp), used where core/simd.h's traversalIsa() is Avx512.
 
 namespace rs {
-
-// Whether traversals use the sixteen-lane steps: where the CPU has AVX-512 and the
-// environment does not say RAYSPLAT_SIMD=sse2. Both paths give the same answers, bit for bit;
-// setTraversalWide chooses (false when asked for a path the CPU lacks).
-bool traversalWide();
-bool setTraversalWide(bool on);
 
 struct Cylinder {
     Vec3 origin{0.f};        // o, voxel space
@@ -371,7 +360,7 @@ private:
     int N_, U_, V_, dimN_, halfU_, halfV_, sizeU_, sizeV_;
     int side_[3], ambOffset_[3];
     bool forward_, hasNormal_;
-    bool sixteen_;  // traversalWide(), read once a cylinder: the sixteen-lane steps
+    bool sixteen_;  // traversalIsa() is Avx512, read once a cylinder: the sixteen-lane steps
     uint16_t* shadow_;  // the shadowable map's cell (0, 0)
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'

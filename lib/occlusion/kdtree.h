@@ -37,7 +37,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "splat/eye.h"
+#include "occlusion/eye_samples.h"
 #include "core/math.h"
 #include "grid/occlusion_grid.h"
 #include "core/parallel.h"

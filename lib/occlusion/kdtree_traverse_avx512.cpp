@@ -4,10 +4,8 @@
 // same operations in the same order as the four-lane step (the build does not contract a
 // product and a sum into one rounding), so the lists, events and values are the same, in the
 // same order, as the four-lane path makes them.
-#include "splat/kdtree_traverse.h"
+#include "occlusion/kdtree_traverse.h"
 
-#include <atomic>
-#include <cstdlib>
 #include <cstring>
 
 #if defined(__GNUC__) && !defined(__clang__)
@@ -19,36 +17,6 @@
 namespace rs {
 
 using namespace kd_detail;
-
-namespace {
-
-// Whether the CPU and the OS can run the sixteen-lane path; RAYSPLAT_SIMD=sse2 turns it off
-// (for comparing the two paths).
-bool detectWide() {
-#if RS_TRAVERSE_AVX512
-    const char* force = std::getenv("RAYSPLAT_SIMD");
-    if (force && std::strcmp(force, "sse2") == 0) return false;
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx512f");
-#else
-    return false;
-#endif
-}
-
-std::atomic<bool>& wideFlag() {
-    static std::atomic<bool> flag{detectWide()};
-    return flag;
-}
-
-}  // namespace
-
-bool traversalWide() { return wideFlag().load(std::memory_order_relaxed); }
-
-bool setTraversalWide(bool on) {
-    if (on && !detectWide()) return false;
-    wideFlag().store(on, std::memory_order_relaxed);
-    return true;
-}
 
 #if RS_TRAVERSE_AVX512
 

@@ -1,5 +1,5 @@
 // Staged outputs (staged_files.h).
-#include "output/staged_files.h"
+#include "core/staged_files.h"
 
 #include <unistd.h>
 

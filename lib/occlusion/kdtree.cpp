@@ -1,4 +1,4 @@
-#include "splat/kdtree.h"
+#include "occlusion/kdtree.h"
 
 #include <algorithm>
 #include <cmath>
