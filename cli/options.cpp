@@ -14,6 +14,17 @@ float parseFloat(const std::string& flag, const std::string& s) {
     return v;
 }
 
+double parseCountValue(const std::string& flag, const std::string& s, double most) {
+    const char unit = s.empty() ? '\0' : s.back();
+    const double scale = unit == 'k' || unit == 'K' ? 1e3 : unit == 'M' ? 1e6 : unit == 'G' ? 1e9 : 1.0;
+    const std::string number = scale != 1.0 ? s.substr(0, s.size() - 1) : s;
+    char* end = nullptr;
+    const double v = std::strtod(number.c_str(), &end) * scale;
+    if (number.empty() || *end != '\0' || !std::isfinite(v) || v < 0.0 || v != std::floor(v) || v > most)
+        throw Error(ErrorKind::Config, flag + ": '" + s + "' is not a count (digits, or a whole number such as 1e6, 2M, 500k)");
+    return v;
+}
+
 // "8G", "512M", "64k" or bytes → bytes (binary units).
 uint64_t parseSize(const std::string& flag, const std::string& s) {
     const char unit = s.empty() ? '\0' : char(std::toupper(static_cast<unsigned char>(s.back())));
@@ -82,7 +93,8 @@ namespace {
 
 // The occlusion grid's options, shared by render and voxelize.
 void addGridOptions(Command& cmd, RenderConfig& cfg) {
-    cmd.add({"--grid", "N", "occlusion grid: voxels along the scene's longest axis (default 192, 1..4096)",
+    cmd.add({"--grid", "N", "occlusion grid: voxels along the scene's longest axis (default " + std::to_string(RenderConfig{}.grid) +
+                                ", 1.." + std::to_string(kMaxGridResolution) + ")",
              [&](const std::string& v) { cfg.grid = parseNumber<int>("--grid", v); }});
     cmd.add({"--voxelizer", "NAME", "auto (default: GPU on a hardware EGL device, else the CPU voxelizer, which gives the same grid faster than a software one), gpu (EGL, llvmpipe included), cpu",
              [&](const std::string& v) { cfg.voxelizer = v; }});
@@ -107,18 +119,32 @@ void addQuietOption(Command& cmd, Arguments& args) {
 
 }  // namespace
 
+// "20/50/30": a photon split in whole per cents.
+static std::string splitPercent(const ClassTriple& split) {
+    const float sum = split[0] + split[1] + split[2];
+    std::string out;
+    for (int c = 0; c < 3; ++c) out += (c ? "/" : "") + std::to_string(int(std::lround(100.f * split[c] / sum)));
+    return out;
+}
+
 Arguments parseRender(int argc, char** argv) {
     Arguments args;
     RenderConfig& cfg = args.cfg;
+    // The defaults the help states, from RenderConfig: the splat's, the path tracer's and the paper's.
+    const RenderConfig defaults;
+    RenderConfig path, paper;
+    path.method = Method::Path;
+    paper.direct = DirectMethod::Photons;
     Command cmd("raysplat render SCENE -o OUT.exr [options]",
                 "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
                 "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): 8 passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
+                "(Herzog & Seidel 2007): " + std::to_string(defaults.passCount()) + " passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
                 "with kernels shrinking from pass to pass. Direct light and emission are sampled in a film of their\n"
                 "own camera samples, as a path tracer does, and a photon reaches the eye samples that see its\n"
                 "origin, its kernel's light kept whole past edges and corners. '--direct photons --passes 1' is\n"
-                "the paper's own estimator (4 samples a pixel, 100000 photons split 20/50/30, GPU voxelization\n"
-                "into an occlusion mask of grid 192, no coverage correction). Outputs are written atomically: a\n"
+                "the paper's own estimator (" + std::to_string(paper.samplesPerPixel()) + " samples a pixel, " + std::to_string(paper.photons) +
+                " photons split " + splitPercent(paper.photonSplit()) + ", GPU voxelization\n"
+                "into an occlusion mask of grid " + std::to_string(paper.grid) + ", no coverage correction). Outputs are written atomically: a\n"
                 "failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or with fewer\n"
                 "passes than ranks each pass's photons, are divided between the ranks: the same image. Scenes may\n"
                 "be lit by a sky (--env, --sky, or the glTF scene's extras raysplat_sky / raysplat_env); nodes whose\n"
@@ -129,15 +155,13 @@ Arguments parseRender(int argc, char** argv) {
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});
     cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
              [&](const std::string& v) { cfg.method = parseMethod(v); }});
-    cmd.add({"--width", "N", "image width in pixels (default 500; 0: from --height and the camera aspect)",
+    cmd.add({"--width", "N", "image width in pixels (default " + std::to_string(defaults.width) + "; 0: from --height and the camera aspect)",
              [&](const std::string& v) { cfg.width = parseNumber<int>("--width", v); }});
     cmd.add({"--height", "N", "image height (default: from the width and the camera's aspect ratio)",
              [&](const std::string& v) { cfg.height = parseNumber<int>("--height", v); }});
-    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat 4 eye samples, path 16)",
-             [&](const std::string& v) {
-                 cfg.spp = parseNumber<int>("--spp", v);
-                 if (cfg.spp < 1) throw Error(ErrorKind::Config, "--spp " + v + " is out of range (1..1048576)");
-             }});
+    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat " + std::to_string(defaults.samplesPerPixel()) +
+                               " eye samples, path " + std::to_string(path.samplesPerPixel()) + "; 0: the method's)",
+             [&](const std::string& v) { cfg.spp = parseCount<int>("--spp", v); }});
     cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
              [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
     cmd.add({"--visibility", "NAME",
@@ -146,53 +170,53 @@ Arguments parseRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.visibility = parseVisibility(v); }});
     cmd.add({"--coverage-probes", "N",
              "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
-                 std::to_string(RenderConfig{}.coverageProbes) + ", 0..16; 0: no correction)",
+                 std::to_string(defaults.coverageProbes) + ", 0.." + std::to_string(CoverageSettings::kMaxProbes) + "; 0: no correction)",
              [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
     cmd.add({"--min-coverage", "C",
              "the least coverage a photon's flux is divided by: fewer fireflies on thin parts, for a measured bias under 0.5 % "
              "of the indirect light "
-             "(default " + numberText(RenderConfig{}.minCoverage) + ", 0..1; 0: none)",
+             "(default " + numberText(defaults.minCoverage) + ", 0..1; 0: none)",
              [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
     cmd.add({"--direct-spp", "N",
              "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
-             "and normal, apart from the photons' receivers (default " + std::to_string(RenderConfig{}.directSpp) +
+             "and normal, apart from the photons' receivers (default " + std::to_string(defaults.directSpp) +
                  "; 0: at the receivers)",
-             [&](const std::string& v) { cfg.directSpp = parseNumber<int>("--direct-spp", v); }});
+             [&](const std::string& v) { cfg.directSpp = parseCount<int>("--direct-spp", v); }});
     cmd.add({"--light-samples", "N", "light samples per direct film sample (or eye sample, with --direct-spp 0) for --direct sample (default " +
-                 std::to_string(RenderConfig{}.lightSamples) + ")",
+                 std::to_string(defaults.lightSamples) + ")",
              [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
-    cmd.add({"--photons", "M", "photon rays stored per pass (default 100000)",
-             [&](const std::string& v) { cfg.photons = parseNumber<int64_t>("--photons", v); }});
-    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default 0,0.5,0.3; with --direct photons 0.2,0.5,0.3)",
+    cmd.add({"--photons", "M", "photon rays stored per pass (default " + std::to_string(defaults.photons) + "; also 1e6, 2M, 500k)",
+             [&](const std::string& v) { cfg.photons = parseCount<int64_t>("--photons", v); }});
+    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default " + tripleText(defaults.photonSplit()) +
+                                     "; with --direct photons " + tripleText(paper.photonSplit()) + ")",
              [&](const std::string& v) {
                  parseTriple("--split", v, cfg.split);
                  cfg.splitSet = true;
              }});
-    const RenderConfig defaults;
     cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default " + tripleText(defaults.kernelPhotons) + ")",
              [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
     cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default " + tripleText(defaults.minRadius) + ")",
              [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
     cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default " + tripleText(defaults.maxRadius) + ")",
              [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
-    cmd.add({"--max-depth", "N", "longest path, in vertices (default 32)",
+    cmd.add({"--max-depth", "N", "longest path, in vertices (default " + std::to_string(defaults.maxDepth) + ")",
              [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
-    cmd.add({"--passes", "N", "passes to render and average (default: splat 8, each new eye samples and photons; path 1 of --spp)",
-             [&](const std::string& v) {
-                 cfg.passes = parseNumber<int>("--passes", v);
-                 if (cfg.passes < 1) throw Error(ErrorKind::Config, "--passes " + v + " is out of range (1..1048576)");
-             }});
+    cmd.add({"--passes", "N", "passes to render and average (default: splat " + std::to_string(defaults.passCount()) +
+                                  ", each new eye samples and photons; path " + std::to_string(path.passCount()) +
+                                  " of --spp; 0: the method's)",
+             [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
     cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
-    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default 0.667)",
+    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default " + numberText(defaults.alpha) + ")",
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
     cmd.add({"--env", "FILE",
              "environment light: an equirectangular OpenEXR, oriented as Blender's world (its centre column along +X, "
              "its top row up), seen through openings, sampled for direct light and sending photons",
              [&](const std::string& v) { cfg.env = v; }});
-    cmd.add({"--env-strength", "S", "multiplies the --env image (default 1)",
+    cmd.add({"--env-strength", "S", "multiplies the --env image (default " + numberText(defaults.envStrength) + ")",
              [&](const std::string& v) { cfg.envStrength = parseFloat("--env-strength", v); }});
-    cmd.add({"--env-rotation", "DEG", "turns the --env image about the up axis as Blender's Mapping node Z rotation in the world shader does (default 0)",
+    cmd.add({"--env-rotation", "DEG", "turns the --env image about the up axis as Blender's Mapping node Z rotation in the world shader does (default " +
+                                          numberText(defaults.envRotation) + ")",
              [&](const std::string& v) { cfg.envRotation = parseFloat("--env-rotation", v); }});
     cmd.add({"--sky", "R,G,B", "a uniform sky of this radiance, W/(m^2 sr) (one number: grey; default none)",
              [&](const std::string& v) {
@@ -206,10 +230,10 @@ Arguments parseRender(int argc, char** argv) {
                  cfg.sky = Vec3(c[0], c[1], c[2]);
              }});
     cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
-    cmd.add({"--seed", "N", "seed of every random sequence (default 0)", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
+    cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(defaults.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default 0)", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
+    cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(defaults.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
     addGridOptions(cmd, cfg);
     cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
              [&](const std::string& v) { cfg.vdb = v; }});

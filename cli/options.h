@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,17 @@ T parseNumber(const std::string& flag, const std::string& s) {
 }
 
 float parseFloat(const std::string& flag, const std::string& s);
+// A count as digits, or as a whole number written with an exponent or a k, M or G suffix
+// (1e6, 2M, 500k, 2.5M).
+double parseCountValue(const std::string& flag, const std::string& s, double most);
+template <class T>
+T parseCount(const std::string& flag, const std::string& s) {
+    T v{};
+    const char* end = s.data() + s.size();
+    auto [p, ec] = std::from_chars(s.data(), end, v);
+    if (ec == std::errc() && p == end && !s.empty()) return v;
+    return T(parseCountValue(flag, s, double(std::numeric_limits<T>::max())));
+}
 // "8G", "512M", "64k" or bytes → bytes (binary units).
 uint64_t parseSize(const std::string& flag, const std::string& s);
 // "a,b,c" → three numbers.

@@ -1,5 +1,7 @@
 #include "config.h"
 
+#include <cstdint>
+
 #include "core/simd.h"
 
 #include <cmath>
@@ -66,8 +68,8 @@ static void requireRange(const char* setting, double v, double lo, double hi) {
 
 void RenderConfig::validate() const {
     checkSimdEnvironment();
-    requireRange("width", width, 0, 16384);
-    requireRange("height", height, 0, 16384);
+    requireRange("width", width, 0, kMaxImageSide);
+    requireRange("height", height, 0, kMaxImageSide);
     if (width == 0 && height == 0) throw Error(ErrorKind::Config, "`width` and `height` cannot both be 0");
     requireRange("spp", spp, 0, 1 << 20);
     requireRange("photons", double(photons), 1, 1e9);
@@ -113,8 +115,16 @@ void RenderConfig::validate() const {
         if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
             throw Error(ErrorKind::Io, *f + ": directory " + dir.string() + " does not exist");
     }
+    if (timeLimit <= 0.0 && passCount() > maxPasses())
+        throw Error(ErrorKind::Config, "`passes` " + std::to_string(passCount()) + " × the samples a pixel of a pass count past 2^31 (at most " +
+                                           std::to_string(maxPasses()) + " passes)");
     double pixels = double(width ? width : height) * double(height ? height : width);
     if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
+}
+
+int RenderConfig::maxPasses() const {
+    const int64_t perPass = std::max<int64_t>({samplesPerPixel(), directSpp, 1});
+    return int(std::min<int64_t>(INT32_MAX / perPass, INT32_MAX));
 }
 
 Environment RenderConfig::environment(const Scene& scene) const {
@@ -143,7 +153,7 @@ void RenderConfig::resolution(float aspect, int& w, int& h) const {
     h = height;
     if (w == 0) w = std::max(1, int(std::lround(h * aspect)));
     if (h == 0) h = std::max(1, int(std::lround(w / aspect)));
-    if (w > 16384 || h > 16384)
+    if (w > kMaxImageSide || h > kMaxImageSide)
         throw Error(ErrorKind::Config, "resolution " + std::to_string(w) + "x" + std::to_string(h) + " from the camera's aspect is too large");
 }
 

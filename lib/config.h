@@ -43,6 +43,8 @@ Visibility parseVisibility(const std::string& name);  // throws Error(Config)
 std::string tripleText(const ClassTriple& v);
 std::string numberText(float v);  // %g
 
+constexpr int kMaxImageSide = 16384;  // pixels, either side of the image
+
 struct RenderConfig {
     std::string scene;
     std::string output;     // .exr
@@ -121,6 +123,9 @@ struct RenderConfig {
 
     int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? PathSettings{}.spp : EyePassSettings{}.spp; }
     int passCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }
+    // The most passes whose camera sample indices (pass × samples a pixel and pass, for the
+    // receivers and the direct film) fit the 31 bits they are counted in.
+    int maxPasses() const;
     bool directBySampling() const { return direct == DirectMethod::Sample; }
     ClassTriple photonSplit() const;
     bool splats() const { return method != Method::Path; }

@@ -8,6 +8,8 @@
 
 #include "core/error.h"
 #include "grid/occlusion_grid.h"
+#include "grid/voxelize.h"
+#include "occlusion/kdtree.h"
 #include "splat/photons.h"
 
 namespace rs {
@@ -16,9 +18,9 @@ namespace {
 
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
-// Per eye sample: 24 bytes and a 20-byte lobe at most, the eye pass's rows appended into one
-// array (twice), and the tree build's keys, flags, order and one permuted array.
-constexpr double kBytesPerEyeSample = 2 * (24 + 20) + 8 + 2 + 4 + 12;
+// Per eye sample: the sample and a lobe at most, the eye pass's rows appended into one array
+// (twice), and the tree build's keys, flags, order and one permuted array.
+constexpr double kBytesPerEyeSample = 2 * double(EyeSamples::kBytesPerSample + sizeof(GlossyLobe)) + 8 + 2 + 4 + 12;
 // Per pixel: the passes' fixed-point sum (six RGB buffers of 8-byte integers: layers, albedo,
 // normal), a pass's float film, and one buffer's copy for a distributed render's reduction.
 constexpr double kFilmBytesPerPixel = 6 * 3 * 8 + 6 * 12 + 3 * 8;
@@ -50,8 +52,9 @@ MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t
     const bool grid = cfg.splats() || !cfg.vdb.empty() || !cfg.cacheDir.empty();
     if (grid) {
         const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);
-        // The counts, and the GPU voxelizer's read-back tile (RGBA32UI, at most 4096² pixels).
-        const double tile = std::min(4.0 * dims[0], 4096.0) * std::min(4.0 * std::max(dims[1], dims[2]), 4096.0);
+        // The counts, and the GPU voxelizer's read-back tile (RGBA32UI, 16 bytes a pixel).
+        const double most = kMaxTilePixels;
+        const double tile = std::min(4.0 * dims[0], most) * std::min(4.0 * std::max(dims[1], dims[2]), most);
         m.grid = voxels * kSideCount + tile * 16;
     }
     m.film = pixels * kFilmBytesPerPixel;
@@ -59,7 +62,8 @@ MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t
     if (cfg.splats()) {
         const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);
         m.eye = pixels * cfg.samplesPerPixel() * kBytesPerEyeSample;
-        m.tree = voxels / 64.0 * 8;  // the summed-area table over the bricks, and their payloads
+        // About one node a brick of 4³ voxels: a bound on the tree's nodes and brick payloads.
+        m.tree = voxels / double(kBrickSize * kBrickSize * kBrickSize) * sizeof(Node);
         m.photons = double(cfg.photons) * sizeof(PhotonRay) * 1.5;  // the map grows by doubling
         m.splat = pixels * kSplatBytesPerPixelThread * std::max(threads, 1);
     }

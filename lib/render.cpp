@@ -157,7 +157,9 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass) {
         passes += round;
         longest = std::max(longest, one.seconds());
         if (several) c.reporter.advance(round);
-        more = agreeOrStop(c.ranks, timed ? t.seconds() + longest <= c.cfg.timeLimit : passes < wanted);
+        // Under a time limit, also no further than the passes whose sample indices fit (maxPasses).
+        more = agreeOrStop(c.ranks, timed ? t.seconds() + longest <= c.cfg.timeLimit && passes + ranks <= c.cfg.maxPasses()
+                                          : passes < wanted);
     }
     if (several) c.reporter.end();
     for (std::vector<int64_t>& buffer : sum.buffers) c.ranks.sumAtRoot(buffer);

@@ -36,10 +36,6 @@ namespace rs {
 
 namespace {
 
-// The largest tile edge in pixels. A power of two; 4096 keeps every window coordinate's
-// arithmetic exact in float (see glsl/voxelize.vert) and the readback of one tile at 256 MiB.
-constexpr int kMaxTilePixels = 4096;
-
 int floorPowerOfTwo(int x) {
     int p = 1;
     while (p * 2 <= x) p *= 2;

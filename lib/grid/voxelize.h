@@ -24,6 +24,11 @@
 
 namespace rs {
 
+// The GPU voxelizer's largest tile edge in pixels. A power of two; 4096 keeps every window
+// coordinate's arithmetic exact in float (see glsl/voxelize.vert) and the readback of one tile
+// (RGBA32UI) at 256 MiB.
+constexpr int kMaxTilePixels = 4096;
+
 using IVec2 = glm::ivec2;
 
 enum class VoxelizerKind { Gpu, Cpu };

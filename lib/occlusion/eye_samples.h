@@ -82,6 +82,8 @@ struct EyeSamples {
     // diffuse: weight × the Lambert f; lobe: the glossy part, if any (its diffuse is set here).
     void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, uint32_t pixel, const Vec3& diffuse,
              const GlossyLobe* lobe = nullptr);
+    // Bytes a sample, and a glossy one's lobe more.
+    static constexpr size_t kBytesPerSample = sizeof(Vec3) + 2 * sizeof(uint16_t) + 2 * sizeof(uint32_t);
     size_t size() const { return position.size(); }
     size_t bytes() const;
     void reserve(size_t n);
