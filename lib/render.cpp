@@ -41,9 +41,6 @@ Ranks& singleProcess() {
 
 namespace {
 
-// Progressive rendering: cfg.passCount() passes, or with a time limit as many as fit (at least
-// one), averaged with equal weights. Each pass reports as one unit of the "rendering"
-// progress when there is more than one.
 // What every stage of a render is handed: the scene and what was built from it, the image
 // size, the settings, and where work, progress and figures go.
 struct RenderContext {

@@ -2,7 +2,7 @@
 """mpi_test: a render divided between Open MPI ranks is the render of one process, to the bit.
 
 Runs the real binary ($RAYSPLAT) under `mpirun --oversubscribe` against the same command
-without mpirun, and compares the EXRs' pixel data byte for byte (docs/design.md §13): splat with
+without mpirun, and compares the EXRs' pixel data byte for byte (docs/design.md §11): splat with
 passes going round the ranks and with one pass shared between them, the path tracer both ways,
 and a --time-limit render, whose ranks must agree on one pass count. A failing rank must end
 every rank with one error line and no output. Skips (77) without mpirun or without MPI in the

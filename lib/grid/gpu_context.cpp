@@ -1,4 +1,4 @@
-// Headless EGL context (docs/design.md §5; the sequence measured in ENVIRONMENT.md "Headless EGL"):
+// Headless EGL context (docs/design.md §5), with no display or window, in this sequence:
 // eglQueryDevicesEXT → eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT) → eglInitialize →
 // eglBindAPI(EGL_OPENGL_API) → context 4.5 core → eglMakeCurrent with no surface.
 // Fallback: EGL_PLATFORM_SURFACELESS_MESA on EGL_DEFAULT_DISPLAY. Every display that fails

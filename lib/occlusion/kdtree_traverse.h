@@ -58,9 +58,7 @@
 // occluders and reached samples (CylinderTraversal::gather), then sweeps them slice by slice
 // (sweep); a sample none of whose four cells holds an occluder of an earlier slice reads V = 1
 // at once. The kd order is near to far (lower child first iff ω_a ≥ 0); nothing depends on it.
-// (An early exit that skipped nodes whose cells were all full before their first slice was
-// measured: it pruned ~2 % of the nodes it tested and cost more than it saved, in renders of
-// interiors too; the answers are the same without it.) Cylinder parts outside the grid or past L are
+// Cylinder parts outside the grid or past L are
 // never visited. At a brick leaf the occupied voxels (its mask's
 // bits inside the cylinder part's bounds) that are met become occluders and its samples that
 // are reached are collected (octants of the brick out of the cylinder's reach are skipped

@@ -48,17 +48,10 @@ using ClassTriple = std::array<float, kPhotonClassCount>;
 struct PhotonSettings {
     int64_t photons = 100000;                 // M, total stored photon rays
     ClassTriple split = {0.2f, 0.5f, 0.3f};   // the paper's
-    // Photons wanted under a kernel, and the radius clamps (voxels). Measured against 4096-spp
-    // path-traced references (glossy box at 500 px, Cornell box at 200 px, seeds 0 and 1), with
-    // k 16/32/16 and max 16/24/16 before: the direct photons' kernels were too small for their
-    // few photons (direct k 16 → 24 halved the glossy box's direct-layer error, 0.0169 →
-    // 0.0112), while indirect kernels past 10 voxels cost most of the splat for no gain (the
-    // 16 % of indirect photons above 12 voxels made 42 % of all contributions; max 24 → 10
-    // with k 32 → 40 left the indirect error as it was, 0.0233 → 0.0237 glossy, 0.0100 →
-    // 0.0098 Cornell). Paper's estimator, rel. MSE and splat time: glossy 0.0353 → 0.0319,
-    // 6.4 → 5.2 s; Cornell 0.0136 → 0.0110, 2.8 → 2.6 s. Default estimator: glossy 0.00573 →
-    // 0.00570, 52 → 43 s; Cornell 0.00122 → 0.00120. (Before that, on the Cornell box, k = 64 /
-    // max 48 had given 0.024 in 24 s, k = 32 / max 24 0.030 in 12 s.)
+    // Photons wanted under a kernel, and the radius clamps (voxels), measured against
+    // path-traced references (docs/design.md §7): direct kernels hold 24 photons, since their
+    // few photons spread thin; indirect kernels stop at 10 voxels, past which they cost most of
+    // the splat for no accuracy; the 6-voxel indirect floor halves the error in closed rooms.
     ClassTriple k = {24.f, 40.f, 16.f};
     // Indirect photons leaving a glossy lobe get a sharp pdf, hence tiny radii and sparkles: a
     // 6-voxel floor halved the error on both boxes (glossy 0.084 → 0.042, Cornell 0.030 → 0.018).
