@@ -429,6 +429,16 @@ def test_help_states_the_defaults_the_render_uses():
     check("%d passes of eye pass" % d["passes"]["splat"] in help_text, "the summary's pass count")
 
 
+def test_usage_page_lists_the_options_of_help():
+    """docs/usage.md's option lists are the command's --help (scripts/update_usage.py)."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+    import update_usage
+    with open(update_usage.USAGE) as f:
+        _, written, _ = update_usage.split(f.read())
+    check(written == update_usage.options_block(RAYSPLAT),
+          "docs/usage.md's option lists differ from --help: run python3 scripts/update_usage.py")
+
+
 def test_counts_take_exponents_and_suffixes():
     """--photons 2k, 2e3 and 2000 are the same render; 2.5, 1x and -3 are refused."""
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
@@ -639,6 +649,7 @@ def main():
             test_progress_json_and_defaults,
             test_help_states_the_defaults_the_render_uses,
             test_counts_take_exponents_and_suffixes,
+            test_usage_page_lists_the_options_of_help,
             test_one_and_two_threads_give_identical_pixels,
         )]
         for name, test in tests:
