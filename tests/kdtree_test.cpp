@@ -198,7 +198,7 @@ std::vector<float> traverse(const OcclusionTree& tree, const EyeSamples& samples
         ++visits[i];
     }, &st);
     for (size_t i = 0; i < visits.size(); ++i) EXPECT_LE(visits[i], 1) << "sample " << i << " visited twice";
-    EXPECT_EQ(st.maskOverflow, 0u);
+    // Occluders outside the mask are an RS_DCHECK: the sanitizer build (no NDEBUG) aborts on one.
     if (stats) *stats = st;
     return vis;
 }

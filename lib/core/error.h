@@ -32,4 +32,15 @@ private:
         }                                                                           \
     } while (0)
 
+// The same for invariants tested inside hot loops: checked in builds without NDEBUG (the
+// sanitizer build, debug builds), compiled out of release builds. `cond` is not evaluated there.
+#ifndef NDEBUG
+#define RS_DCHECK(cond) RS_CHECK(cond)
+#else
+#define RS_DCHECK(cond) \
+    do {                \
+        (void)sizeof(cond); \
+    } while (0)
+#endif
+
 }  // namespace rs

@@ -344,10 +344,10 @@ void CylinderTraversal::addOccluderAt(int cu, int cv, int layer, VoxelOcclusion 
     occ = std::min(1.f, occ);
     if (occ <= 0.f) return;
     const int slice = sliceOf(layer) + (voxel.ambiguous() ? ambOffset_[voxel.dominantAxis()] : 0);
-    if (cu < 0 || cv < 0 || cu >= sizeU_ || cv >= sizeV_) {
-        ++st_.maskOverflow;
-        return;
-    }
+    // Inside the mask by construction (the mask covers the cylinder's cross-section and the
+    // margin); a release build still never writes past it.
+    RS_DCHECK(cu >= 0 && cv >= 0 && cu < sizeU_ && cv < sizeV_);
+    if (cu < 0 || cv < 0 || cu >= sizeU_ || cv >= sizeV_) return;
     // Written field by field where it lies: an event made on the stack and copied was read back
     // as one 8-byte word over two 4-byte stores, which the CPU cannot forward (a third of the
     // function's time).

@@ -77,6 +77,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/error.h"
 #include "core/simd.h"
 #include "occlusion/eye_samples.h"
 #include "occlusion/kdtree.h"
@@ -99,10 +100,9 @@ struct TraversalStats {
     uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
     uint64_t samplesSwept = 0;   // reached samples an occluder may shadow: read in the slice sweep
     uint64_t samplesBoxed = 0;   // reached samples taken a box at a time, their positions not read
-    uint64_t maskOverflow = 0;  // occluders outside the mask (none by construction)
     void add(const TraversalStats& o) {
         cylinders += o.cylinders, nodes += o.nodes, occluders += o.occluders;
-        samplesReached += o.samplesReached, samplesVisited += o.samplesVisited, maskOverflow += o.maskOverflow;
+        samplesReached += o.samplesReached, samplesVisited += o.samplesVisited;
         samplesTested += o.samplesTested, samplesSwept += o.samplesSwept, samplesBoxed += o.samplesBoxed;
     }
 };

@@ -299,7 +299,7 @@ __attribute__((target("avx512f"))) size_t CylinderTraversal::addOccluders16(__mm
                                                                                                       0, 0, 0, 0, 0, 0, 0));
     __m512i slice = forward_ ? layer : _mm512_sub_epi32(_mm512_set1_epi32(dimN_ - 1), layer);
     slice = _mm512_mask_add_epi32(slice, ambiguous, slice, offset);
-    st_.maskOverflow += uint64_t(__builtin_popcount(occludes & ~inMask));
+    RS_DCHECK((occludes & ~inMask) == 0);  // inside the mask by construction, as in addOccluderAt
     const __mmask16 keep = occludes & inMask;
     if (!keep) return n;
     writeOccluders16(keep, _mm512_add_epi32(cu, _mm512_mullo_epi32(cv, _mm512_set1_epi32(sizeU_))), slice, occ, &s_.occluders[n]);
