@@ -237,6 +237,17 @@ Arguments parseRender(int argc, char** argv) {
     addGridOptions(cmd, cfg);
     cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
              [&](const std::string& v) { cfg.vdb = v; }});
+    cmd.add({"--photon", "PASS:INDEX",
+             "replay one photon ray (debugging): the image is the splat of ray INDEX of pass PASS alone, and its record "
+             "(class, ends, flux, radius, reach, coverage, eye samples reached) is printed; with a --seed, the same ray as "
+             "in the full render",
+             [&](const std::string& v) {
+                 const size_t colon = v.find(':');
+                 if (colon == std::string::npos) throw Error(ErrorKind::Config, "--photon " + v + ": not PASS:INDEX");
+                 cfg.replayPass = parseNumber<int>("--photon", v.substr(0, colon));
+                 cfg.replayIndex = parseCount<int64_t>("--photon", v.substr(colon + 1));
+                 if (cfg.replayPass < 0) throw Error(ErrorKind::Config, "--photon " + v + ": the pass is negative");
+             }});
     cmd.add({"--blender-layer", "NAME",
              "name the EXR's channels as Blender's multilayer EXR of view layer NAME: NAME.Combined.RGBA, NAME.Direct.RGB, "
              "... NAME.Albedo.RGB, NAME.Normal.XYZ (Blender's axes), which Blender opens as passes",

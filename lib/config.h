@@ -72,6 +72,11 @@ struct RenderConfig {
     // Non-empty: the EXR's channels are named as Blender's multilayer EXR of this view layer
     // (writeExrTo), as the Blender add-on loads them.
     std::string blenderLayer;
+    // ≥ 0: replay one photon ray, number `replayIndex` (in merge order) of pass `replayPass`:
+    // the image is that ray's splat alone, and its record is reported (docs/design.md §9).
+    int replayPass = -1;
+    int64_t replayIndex = -1;
+    bool replays() const { return replayPass >= 0; }
 
     // The environment light (docs/design.md §4): an equirectangular OpenEXR `env` in Blender's
     // world orientation, times `envStrength`, turned `envRotation` degrees about the up axis as
@@ -119,7 +124,7 @@ struct RenderConfig {
     GridSettings gridSettings() const { return {grid, voxelizer, vdb, cacheDir}; }
 
     int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? PathSettings{}.spp : EyePassSettings{}.spp; }
-    int passCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }
+    int passCount() const { return replays() ? 1 : passes > 0 ? passes : method == Method::Path ? 1 : 8; }
     // The most passes whose camera sample indices (pass × samples a pixel and pass, for the
     // receivers and the direct film) fit the 31 bits they are counted in.
     int maxPasses() const;

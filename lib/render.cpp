@@ -198,6 +198,30 @@ struct SplatTotals {
     double photonMb = 0.0;
 };
 
+// The photon ray --photon asks for, as traced (before its coverage); an error when the pass
+// has fewer.
+PhotonRay replayedRay(const RenderContext& c, const PhotonMap& photons) {
+    if (c.cfg.replayIndex >= int64_t(photons.rays.size()))
+        throw Error(ErrorKind::Config, "`photon` " + std::to_string(c.cfg.replayPass) + ":" + std::to_string(c.cfg.replayIndex) +
+                                           ": pass " + std::to_string(c.cfg.replayPass) + " has " +
+                                           std::to_string(photons.rays.size()) + " photon rays");
+    return photons.rays[size_t(c.cfg.replayIndex)];
+}
+
+// One line: the replayed ray's class, ends, flux, kernel and the coverage its flux was divided by.
+void reportReplayed(const RenderContext& c, const PhotonRay& traced, const PhotonRay& ray, float voxel) {
+    const Vec3 hit = ray.origin + ray.length * ray.dir;
+    const float divided = luminance(ray.flux) > 0.f ? luminance(traced.flux) / luminance(ray.flux) : 0.f;
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "photon ray %lld of pass %d: %s, from (%.4g, %.4g, %.4g) to (%.4g, %.4g, %.4g), flux (%.4g, %.4g, %.4g) W, "
+                  "radius %.4g m (%.3g voxels), reach %.3g radii, flux divided by coverage %.3g",
+                  (long long)c.cfg.replayIndex, c.cfg.replayPass, photonClassName(ray.cls), ray.origin.x, ray.origin.y,
+                  ray.origin.z, hit.x, hit.y, hit.z, ray.flux.x, ray.flux.y, ray.flux.z, ray.radius,
+                  ray.radius / voxel, ray.reach, divided);
+    c.reporter.info(buf);
+}
+
 Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     Stats& stats = c.stats;
     // The occlusion grid, once (docs/design.md §5–6), where the mask needs it or its file was asked
@@ -219,7 +243,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
     // new photons (a fresh range of paths) with shrunk kernels, splatted (docs/design.md §4, §7–9).
     return renderPasses(c, [&](const PassShare& share, FixedFilm& sum) {
-        const int pass = share.pass;
+        const int pass = c.cfg.replays() ? c.cfg.replayPass : share.pass;
         Timer t;
         es.firstSample = pass * es.spp;
         es.firstDirectSample = pass * es.directSpp;
@@ -242,6 +266,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         ps.radiusScale = passRadiusScale(pass, c.cfg.alpha);
         PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, ps, c.pool, c.reporter);
         stats.addTime("photons", t.seconds());
+        const PhotonRay traced = c.cfg.replays() ? replayedRay(c, photons) : PhotonRay{};
         // The kernels' coverage, measured as the receiver rules will see it (docs/design.md §8).
         if (coverage) {
             t = Timer();
@@ -254,10 +279,15 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         totals.photonsStored += int64_t(photons.rays.size());
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
+        if (c.cfg.replays()) {  // that ray alone, after its coverage, and no light of the eye pass's
+            const PhotonRay ray = photons.rays[size_t(c.cfg.replayIndex)];
+            photons.rays.assign(1, ray);
+            reportReplayed(c, traced, ray, grid.geometry.voxelSize);
+        }
         // The eye pass's own light (emission, albedo, normal, sampled direct light), then the
         // photons' (this rank's share of them).
         t = Timer();
-        if (share.share == 0) sum.add(eye.film);
+        if (share.share == 0 && !c.cfg.replays()) sum.add(eye.film);
         splat.share = share.share;
         splat.shares = share.shares;
         splatPhotons(c.accel, tree, eye.samples, photons, splat, sum, c.pool, c.reporter, &totals.splat);
@@ -266,6 +296,9 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         stats.setCount("photons_stored", double(totals.photonsStored));
         stats.setCount("radius_scale", ps.radiusScale);
         totals.splat.report(stats);
+        if (c.cfg.replays())
+            c.reporter.info("photon ray " + std::to_string(c.cfg.replayIndex) + " reached " +
+                            std::to_string(int64_t(stats.count("splat_contributions"))) + " eye samples");
     });
 }
 

@@ -360,3 +360,41 @@ TEST(SplatRenderer, ThreadCountDoesNotChangePixels) {
     for (const Vec3& v : a.film.layers[kCaustic]) caustic += v.x;
     EXPECT_GT(caustic, 0.0) << "the glass sphere makes caustics";
 }
+
+// --photon replays one photon ray: the same ray as in the full render (the same path, radius,
+// coverage and receivers), so the replays of every ray of a pass add up to that pass's photon
+// light. On the glossy box (indirect and caustic rays, glass) with 40 photons in one pass.
+TEST(SplatRenderer, ReplayedPhotonsAddUpToTheirPass) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
+    RenderConfig cfg = splatConfig(24);
+    cfg.height = 0;
+    cfg.photons = 40;
+    cfg.passes = 1;
+    const RenderResult full = render(scene, cfg, silentReporter());
+    std::vector<Vec3> sum(full.film.layers[kIndirect].size(), Vec3(0.f));
+    std::vector<Vec3> caustic = sum;
+    cfg.passes = 0;
+    cfg.replayPass = 0;
+    for (int i = 0; i < 40; ++i) {
+        cfg.replayIndex = i;
+        const RenderResult one = render(scene, cfg, silentReporter());
+        for (size_t p = 0; p < sum.size(); ++p) {
+            sum[p] += one.film.layers[kIndirect][p];
+            caustic[p] += one.film.layers[kCaustic][p];
+            ASSERT_EQ(one.film.layers[kEmission][p], Vec3(0.f)) << "the eye pass's own light is left out";
+        }
+    }
+    double light = 0.0;
+    for (size_t p = 0; p < sum.size(); ++p) {
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(sum[p][c], full.film.layers[kIndirect][p][c], 1e-5f * (1.f + full.film.layers[kIndirect][p][c]));
+            EXPECT_NEAR(caustic[p][c], full.film.layers[kCaustic][p][c], 1e-5f * (1.f + full.film.layers[kCaustic][p][c]));
+        }
+        light += sum[p].x + caustic[p].x;
+    }
+    EXPECT_GT(light, 0.0) << "not vacuous";
+    cfg.replayIndex = 40;
+    EXPECT_THROW(render(scene, cfg, silentReporter()), Error) << "past the pass's rays";
+}
