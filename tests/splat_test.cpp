@@ -316,7 +316,7 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     // 34 % here (the sphere has many triangles); 14 % by the planes alone, without the edges.
     EXPECT_GT(sa.visibleByPlanes, sa.contributions / 4);
     EXPECT_EQ(sa.visibilityRays + sa.visibleByPlanes, sb.visibilityRays);
-    EXPECT_GT(sb.refused[SegmentReceivers::kHidden], 0u);
+    EXPECT_GT(sb.refusedHidden, 0u);
 
     // Four samples at a time give what one at a time gives, to the bit.
     SplatSettings oneByOne;

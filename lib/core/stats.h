@@ -10,6 +10,16 @@ namespace rs {
 
 constexpr double kMB = 1024.0 * 1024.0;  // bytes in the *_mb counts
 
+// Counters declared once. A list macro names each counter's member and its --stats-json name,
+//   #define MY_COUNTERS(X) X(nodes, "tree_nodes") X(bricks, "tree_bricks")
+// and a struct gets its members, their sum and their report from it:
+//   struct MyStats { MY_COUNTERS(RS_COUNTER_MEMBER)
+//       void add(const MyStats& o) { MY_COUNTERS(RS_COUNTER_ADD) }
+//       void report(Stats& stats) const { MY_COUNTERS(RS_COUNTER_REPORT) } };
+#define RS_COUNTER_MEMBER(member, name) uint64_t member = 0;
+#define RS_COUNTER_ADD(member, name) member += o.member;
+#define RS_COUNTER_REPORT(member, name) stats.setCount(name, double(member));
+
 // `s` as a JSON string literal, quotes included.
 std::string jsonString(const std::string& s);
 

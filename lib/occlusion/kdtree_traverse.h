@@ -95,16 +95,18 @@ struct Cylinder {
     Vec3 originNormal{0.f};   // n_o, unit normal of the surface the photon leaves; zero if none
 };
 
+// Tested: samples whose position was read to test whether they are reached. Swept: reached
+// samples an occluder may shadow, read in the slice sweep. Boxed: reached samples taken a box
+// at a time, their positions not read.
+#define RS_TRAVERSAL_COUNTERS(X)                                                                  \
+    X(cylinders, "traversal_cylinders") X(nodes, "traversal_nodes") X(occluders, "traversal_occluders") \
+    X(samplesReached, "traversal_samples_reached") X(samplesVisited, "traversal_samples_visited")     \
+    X(samplesTested, "traversal_samples_tested") X(samplesSwept, "traversal_samples_swept")           \
+    X(samplesBoxed, "traversal_samples_boxed")
 struct TraversalStats {
-    uint64_t cylinders = 0, nodes = 0, occluders = 0, samplesReached = 0, samplesVisited = 0;
-    uint64_t samplesTested = 0;  // samples whose position was read to test whether they are reached
-    uint64_t samplesSwept = 0;   // reached samples an occluder may shadow: read in the slice sweep
-    uint64_t samplesBoxed = 0;   // reached samples taken a box at a time, their positions not read
-    void add(const TraversalStats& o) {
-        cylinders += o.cylinders, nodes += o.nodes, occluders += o.occluders;
-        samplesReached += o.samplesReached, samplesVisited += o.samplesVisited;
-        samplesTested += o.samplesTested, samplesSwept += o.samplesSwept, samplesBoxed += o.samplesBoxed;
-    }
+    RS_TRAVERSAL_COUNTERS(RS_COUNTER_MEMBER)
+    void add(const TraversalStats& o) { RS_TRAVERSAL_COUNTERS(RS_COUNTER_ADD) }
+    void report(Stats& stats) const { RS_TRAVERSAL_COUNTERS(RS_COUNTER_REPORT) }
 };
 
 constexpr int kMaxAmbiguousOffset = 4;    // N slices

@@ -78,30 +78,6 @@ std::vector<uint32_t> coherentOrder(const PhotonMap& photons, const GridGeometry
 
 }  // namespace
 
-void SplatStats::report(Stats& stats) const {
-    stats.setCount("splat_contributions", double(contributions));
-    stats.setCount("traversal_nodes", double(traversal.nodes));
-    stats.setCount("traversal_occluders", double(traversal.occluders));
-    stats.setCount("traversal_samples_reached", double(traversal.samplesReached));
-    stats.setCount("traversal_samples_visited", double(traversal.samplesVisited));
-    stats.setCount("traversal_samples_tested", double(traversal.samplesTested));
-    stats.setCount("traversal_samples_swept", double(traversal.samplesSwept));
-    stats.setCount("traversal_samples_boxed", double(traversal.samplesBoxed));
-    stats.setCount("splat_visibility_rays", double(visibilityRays));
-    stats.setCount("splat_visible_by_planes", double(visibleByPlanes));
-    stats.setCount("splat_refused_behind_origin", double(refused[SegmentReceivers::kBehindOrigin]));
-    stats.setCount("splat_refused_hidden", double(refused[SegmentReceivers::kHidden]));
-}
-
-void SplatStats::add(const SplatStats& o) {
-    traversal.add(o.traversal);
-    contributions += o.contributions;
-    visibilityRays += o.visibilityRays;
-    visibleByPlanes += o.visibleByPlanes;
-    for (int i = 0; i < SegmentReceivers::kVerdictCount; ++i) refused[i] += o.refused[i];
-}
-
-
 namespace {
 
 // Contributions waiting for rule 2, which is asked a packet at a time; those whose sample
@@ -121,7 +97,7 @@ public:
         stats_.visibilityRays += uint64_t(count_);
         for (int i = 0; i < count_; ++i) {
             if (hidden >> i & 1u) {
-                ++stats_.refused[SegmentReceivers::kHidden];
+                ++stats_.refusedHidden;
                 continue;
             }
             addFixed(pixel_[i], c_[i]);
@@ -238,7 +214,7 @@ public:
         const Vec3 ng = units_[samples_.geomNormal[i]];
         if (glm::dot(ng, w) >= 0.f) return;
         if (visibility_ && !receivers_.inFrontOfOrigin(y)) {
-            ++stats_.refused[SegmentReceivers::kBehindOrigin];
+            ++stats_.refusedBehindOrigin;
             return;
         }
         // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
@@ -351,7 +327,7 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
     if (!live) return;
     // Rule 1: in front of the origin's tangent plane.
     const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(wide_.originNormal), zero))) : 15u;
-    if (const uint32_t behind = live & ~front) stats_.refused[SegmentReceivers::kBehindOrigin] += uint64_t(__builtin_popcount(behind));
+    if (const uint32_t behind = live & ~front) stats_.refusedBehindOrigin += uint64_t(__builtin_popcount(behind));
     live &= front;
     if (!live) return;
     // Equation (2): w · f_r · Φ · biweightKernel(max(d2, 0), h2) · −cos θ · V.

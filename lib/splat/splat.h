@@ -23,14 +23,25 @@ class ThreadPool;
 struct Stats;
 class Reporter;
 
+// Contributions: (photon, eye sample) pairs that received energy. Visibility rays: Embree
+// occlusion rays of the receiver rules; visible by planes: rule 2 decided without a ray
+// (SegmentReceivers). Refused: samples the receiver rules refused, behind the origin's plane or
+// hidden from it.
+#define RS_SPLAT_COUNTERS(X)                                                                         \
+    X(contributions, "splat_contributions") X(visibilityRays, "splat_visibility_rays")                \
+    X(visibleByPlanes, "splat_visible_by_planes") X(refusedBehindOrigin, "splat_refused_behind_origin") \
+    X(refusedHidden, "splat_refused_hidden")
 struct SplatStats {
     TraversalStats traversal;
-    uint64_t contributions = 0;  // (photon, eye sample) pairs that received energy
-    uint64_t visibilityRays = 0;  // Embree occlusion rays of the receiver rules
-    uint64_t visibleByPlanes = 0;  // rule 2 decided without a ray (SegmentReceivers)
-    uint64_t refused[2] = {};     // samples the receiver rules refused, by SegmentReceivers::Verdict
-    void add(const SplatStats& o);
-    void report(Stats& stats) const;  // splat_* and traversal_* counts
+    RS_SPLAT_COUNTERS(RS_COUNTER_MEMBER)
+    void add(const SplatStats& o) {
+        traversal.add(o.traversal);
+        RS_SPLAT_COUNTERS(RS_COUNTER_ADD)
+    }
+    void report(Stats& stats) const {  // splat_* and traversal_* counts
+        traversal.report(stats);
+        RS_SPLAT_COUNTERS(RS_COUNTER_REPORT)
+    }
 };
 
 // The receiver rules of one photon segment x(i−1) → x(i) (world space): whether an eye
