@@ -210,7 +210,7 @@ Arguments parseRender(int argc, char** argv) {
     cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default " + numberText(defaults.alpha) + ")",
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
     cmd.add({"--env", "FILE",
-             "environment light: an equirectangular OpenEXR, oriented as Blender's world (its centre column along +X, "
+             "environment light: an equirectangular OpenEXR or Radiance .hdr, oriented as Blender's world (its centre column along +X, "
              "its top row up), seen through openings, sampled for direct light and sending photons",
              [&](const std::string& v) { cfg.env = v; }});
     cmd.add({"--env-strength", "S", "multiplies the --env image (default " + numberText(defaults.envStrength) + ")",

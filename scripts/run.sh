@@ -24,7 +24,7 @@ cd "$(dirname "$0")/.."
 packages=(g++ pkg-config meson ninja-build python3 python3-venv zlib1g-dev
   libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri libglm-dev
   libembree-dev libopenvdb-dev libboost-dev libopenexr-dev libtinygltf-dev
-  libtbb-dev libgtest-dev libbenchmark-dev libopenmpi-dev openmpi-bin)
+  libtbb-dev libgtest-dev libbenchmark-dev libopenmpi-dev openmpi-bin libstb-dev)
 
 install_missing() {
   local missing=()

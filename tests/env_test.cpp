@@ -4,8 +4,11 @@
 // pixels), and photons from the sky against the path tracer.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <fstream>
 
+#include "core/error.h"
 #include "core/log.h"
 #include "core/sampling.h"
 #include "output/image_io.h"
@@ -413,5 +416,67 @@ TEST(Environment, SunPatchThroughAnOpeningIsAnalytic) {
         ASSERT_GT(nOut, 50);
         EXPECT_NEAR(in.x / nIn, want, 0.01 * want) << methodName(m);
         EXPECT_LT(out.x / nOut, 1e-4) << methodName(m);
+    }
+}
+
+namespace {
+
+// A Radiance picture of w × h pixels, top row first: flat scanlines when `runLength` is false,
+// else the run-length scanlines of Radiance's newer format (a run for each channel's row).
+std::string writeRadiance(const TempDir& dir, const std::vector<std::array<uint8_t, 4>>& rgbe, int w, int h, bool runLength) {
+    const std::string path = (dir.path() / (runLength ? "sky_rle.hdr" : "sky.hdr")).string();
+    std::ofstream out(path, std::ios::binary);
+    out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y " << h << " +X " << w << "\n";
+    for (int y = 0; y < h; ++y) {
+        if (!runLength) {
+            for (int x = 0; x < w; ++x) out.write(reinterpret_cast<const char*>(rgbe[size_t(y) * w + x].data()), 4);
+            continue;
+        }
+        const uint8_t head[4] = {2, 2, uint8_t(w >> 8), uint8_t(w & 0xff)};
+        out.write(reinterpret_cast<const char*>(head), 4);
+        for (int c = 0; c < 4; ++c)  // literal runs of at most 128 bytes
+            for (int x0 = 0; x0 < w; x0 += 128) {
+                const int n = std::min(128, w - x0);
+                out.put(char(n));
+                for (int x = x0; x < x0 + n; ++x) out.put(char(rgbe[size_t(y) * w + x][c]));
+            }
+    }
+    return path;
+}
+
+}  // namespace
+
+// --env reads a Radiance .hdr as it reads an OpenEXR: the same radiance in every pixel, flat
+// and run-length scanlines alike (RGBE values chosen exact in both: r·2^(e−136)).
+TEST(Environment, RadianceHdrReadsAsTheSameExr) {
+    TempDir dir;
+    const int w = 16, h = 8;
+    std::vector<std::array<uint8_t, 4>> rgbe(size_t(w) * h);
+    std::vector<Vec3> px(rgbe.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const uint8_t r = uint8_t(128 + 8 * x % 128), g = uint8_t(128 + 16 * y), b = 200, e = uint8_t(129 + (x + y) % 3);
+            rgbe[size_t(y) * w + x] = {r, g, b, e};
+            const float scale = std::ldexp(1.f, int(e) - 136);
+            px[size_t(y) * w + x] = Vec3(r * scale, g * scale, b * scale);
+        }
+    const Environment fromExr = loadEnvironment(writeEnvironment(dir, px, w, h), 1.5f, 0.3f);
+    for (bool runLength : {false, true}) {
+        const Environment fromHdr = loadEnvironment(writeRadiance(dir, rgbe, w, h, runLength), 1.5f, 0.3f);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const Vec3 d = blenderDirection((x + 0.5f) / w, (y + 0.5f) / h);
+                EXPECT_EQ(fromHdr.radiance(d), fromExr.radiance(d)) << "pixel " << x << "," << y << (runLength ? " (RLE)" : "");
+            }
+        EXPECT_EQ(fromHdr.integral(), fromExr.integral());
+    }
+    // A file that begins as a Radiance picture and breaks off is one error naming it.
+    const std::string broken = (dir.path() / "broken.hdr").string();
+    std::ofstream(broken, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\x02\x02";
+    try {
+        loadEnvironment(broken, 1.f, 0.f);
+        ADD_FAILURE() << "a broken .hdr was read";
+    } catch (const rs::Error& e) {
+        EXPECT_NE(std::string(e.what()).find(broken), std::string::npos) << e.what();
     }
 }

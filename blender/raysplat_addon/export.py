@@ -41,7 +41,7 @@ def _area_lamp_quad(obj, collection):
 
 
 def world_options(scene, report):
-    """--env/--sky options for the world: an Environment Texture (through a Mapping node's Z
+    """--env/--sky options for the world: an Environment Texture (OpenEXR or .hdr; through a Mapping node's Z
     rotation, if any) into a Background's Color, times its Strength; or a plain colour."""
     world = scene.world
     if world is None or not world.use_nodes or world.node_tree is None:
@@ -62,8 +62,9 @@ def world_options(scene, report):
         report({"WARNING"}, f"raysplat: the world's colour comes from a {tex.type} node; only an Environment Texture is read")
         return []
     path = bpy.path.abspath(tex.image.filepath)
-    if not path.lower().endswith(".exr"):
-        report({"WARNING"}, f"raysplat: the world's image {os.path.basename(path)} is not OpenEXR; raysplat reads .exr skies only")
+    if not path.lower().endswith((".exr", ".hdr")):
+        report({"WARNING"}, f"raysplat: the world's image {os.path.basename(path)} is neither OpenEXR nor Radiance .hdr, "
+                             "the skies raysplat reads")
         return []
     rotation = 0.0
     vector = tex.inputs["Vector"].links

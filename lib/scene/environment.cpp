@@ -2,10 +2,12 @@
 
 #include <OpenEXR/ImfArray.h>
 #include <OpenEXR/ImfRgbaFile.h>
+#include <stb_image.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "core/error.h"
 #include "core/sampling.h"
@@ -129,11 +131,28 @@ float Environment::pdf(const Vec3& dir) const {
     return float(double(weight_[size_t(y) * width_ + x]) * double(width_) * double(height_) / (2.0 * kPi * kPi * sinTheta));
 }
 
-Environment loadEnvironment(const std::string& path, float strength, float rotationRadians) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw Error(ErrorKind::Io, path + ": no such file");
-    int width = 0, height = 0;
-    std::vector<Vec3> pixels;
+namespace {
+
+// Whether the file starts as a Radiance picture does ("#?RADIANCE" or "#?RGBE").
+bool isRadiance(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char head[10] = {};
+    in.read(head, sizeof head);
+    const std::string start(head, size_t(in.gcount()));
+    return start.rfind("#?RADIANCE", 0) == 0 || start.rfind("#?RGBE", 0) == 0;
+}
+
+// A Radiance .hdr (RGBE, flat or run-length scanlines) by stb_image, top row first as in EXR.
+void readRadiance(const std::string& path, int& width, int& height, std::vector<Vec3>& pixels) {
+    int channels = 0;
+    float* data = stbi_loadf(path.c_str(), &width, &height, &channels, 3);
+    if (!data) throw Error(ErrorKind::Io, path + ": not a Radiance .hdr image the environment can read (" + stbi_failure_reason() + ")");
+    pixels.resize(size_t(width) * size_t(height));
+    for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = Vec3(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
+    stbi_image_free(data);
+}
+
+void readOpenExr(const std::string& path, int& width, int& height, std::vector<Vec3>& pixels) {
     try {
         Imf::RgbaInputFile file(path.c_str());
         const Imath::Box2i dw = file.dataWindow();
@@ -149,8 +168,24 @@ Environment loadEnvironment(const std::string& path, float strength, float rotat
                 pixels[size_t(y) * width + x] = Vec3(float(p.r), float(p.g), float(p.b));
             }
     } catch (const std::exception& e) {
-        throw Error(ErrorKind::Io, path + ": not an OpenEXR image the environment can read (" + e.what() + ")");
+        throw Error(ErrorKind::Io, path + ": not an OpenEXR or Radiance .hdr image the environment can read (" + e.what() + ")");
     }
+}
+
+}  // namespace
+
+Environment loadEnvironment(const std::string& path, float strength, float rotationRadians) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw Error(ErrorKind::Io, path + ": no such file");
+    int width = 0, height = 0;
+    std::vector<Vec3> pixels;
+    if (isRadiance(path))
+        readRadiance(path, width, height, pixels);
+    else
+        readOpenExr(path, width, height, pixels);
+    for (const Vec3& p : pixels)
+        if (!isFinite(p) || p.x < 0.f || p.y < 0.f || p.z < 0.f)
+            throw Error(ErrorKind::Config, path + ": the environment image has a negative or non-finite pixel");
     if (width != 2 * height)
         throw Error(ErrorKind::Config, path + ": " + std::to_string(width) + "x" + std::to_string(height) +
                                            " pixels; an equirectangular environment is twice as wide as high");
