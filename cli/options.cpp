@@ -117,50 +117,47 @@ void addQuietOption(Command& cmd, Arguments& args) {
              }});
 }
 
-}  // namespace
-
 // "20/50/30": a photon split in whole per cents.
-static std::string splitPercent(const ClassTriple& split) {
+std::string splitPercent(const ClassTriple& split) {
     const float sum = split[0] + split[1] + split[2];
     std::string out;
     for (int c = 0; c < 3; ++c) out += (c ? "/" : "") + std::to_string(int(std::lround(100.f * split[c] / sum)));
     return out;
 }
 
-Arguments parseRender(int argc, char** argv) {
-    Arguments args;
-    RenderConfig& cfg = args.cfg;
-    // The defaults the help states, from RenderConfig: the splat's, the path tracer's and the paper's.
-    const RenderConfig defaults;
-    RenderConfig path, paper;
-    path.method = Method::Path;
-    paper.direct = DirectMethod::Photons;
-    Command cmd("raysplat render SCENE -o OUT.exr [options]",
-                "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
-                "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
-                "(Herzog & Seidel 2007): " + std::to_string(defaults.passCount()) + " passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
-                "with kernels shrinking from pass to pass. Direct light and emission are sampled in a film of their\n"
-                "own camera samples, as a path tracer does, and a photon reaches the eye samples that see its\n"
-                "origin, its kernel's light kept whole past edges and corners. '--direct photons --passes 1' is\n"
-                "the paper's own estimator (" + std::to_string(paper.samplesPerPixel()) + " samples a pixel, " + std::to_string(paper.photons) +
-                " photons split " + splitPercent(paper.photonSplit()) + ", GPU voxelization\n"
-                "into an occlusion mask of grid " + std::to_string(paper.grid) + ", no coverage correction). Outputs are written atomically: a\n"
-                "failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or with fewer\n"
-                "passes than ranks each pass's photons, are divided between the ranks: the same image. Scenes may\n"
-                "be lit by a sky (--env, --sky, or the glTF scene's extras raysplat_sky / raysplat_env); nodes whose\n"
-                "extras set raysplat_portal are light portals (windows): the sun's and the sky's photons enter\n"
-                "through them. glTF alphaMode MASK and BLEND cut surfaces everywhere, the voxel grid included.");
+// The defaults the help states, from RenderConfig: the splat's, the path tracer's and the
+// paper's estimator's.
+struct RenderDefaults {
+    RenderConfig splat, path, paper;
+    RenderDefaults() {
+        path.method = Method::Path;
+        paper.direct = DirectMethod::Photons;
+    }
+};
+
+// The outputs, the camera and the image size.
+void addOutputOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
     cmd.add({"--output", "FILE", "OpenEXR output", [&](const std::string& v) { cfg.output = v; }, "-o"});
     cmd.add({"--png", "FILE", "also write a tone-mapped sRGB PNG preview", [&](const std::string& v) { cfg.png = v; }});
     cmd.add({"--stats-json", "FILE", "write per-stage times and counts as JSON", [&](const std::string& v) { cfg.statsJson = v; }});
-    cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
-             [&](const std::string& v) { cfg.method = parseMethod(v); }});
-    cmd.add({"--width", "N", "image width in pixels (default " + std::to_string(defaults.width) + "; 0: from --height and the camera aspect)",
+    cmd.add({"--blender-layer", "NAME",
+             "name the EXR's channels as Blender's multilayer EXR of view layer NAME: NAME.Combined.RGBA, NAME.Direct.RGB, "
+             "... NAME.Albedo.RGB, NAME.Normal.XYZ (Blender's axes), which Blender opens as passes",
+             [&](const std::string& v) { cfg.blenderLayer = v; }});
+    cmd.add({"--width", "N", "image width in pixels (default " + std::to_string(d.splat.width) + "; 0: from --height and the camera aspect)",
              [&](const std::string& v) { cfg.width = parseNumber<int>("--width", v); }});
     cmd.add({"--height", "N", "image height (default: from the width and the camera's aspect ratio)",
              [&](const std::string& v) { cfg.height = parseNumber<int>("--height", v); }});
-    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat " + std::to_string(defaults.samplesPerPixel()) +
-                               " eye samples, path " + std::to_string(path.samplesPerPixel()) + "; 0: the method's)",
+    cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
+    cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(d.splat.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
+}
+
+// The method, its samples and passes.
+void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
+    cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
+             [&](const std::string& v) { cfg.method = parseMethod(v); }});
+    cmd.add({"--spp", "N", "samples per pixel and pass (default: splat " + std::to_string(d.splat.samplesPerPixel()) +
+                               " eye samples, path " + std::to_string(d.path.samplesPerPixel()) + "; 0: the method's)",
              [&](const std::string& v) { cfg.spp = parseCount<int>("--spp", v); }});
     cmd.add({"--direct", "NAME", "direct light: sample (default: light sampling at every eye sample), photons (the paper's)",
              [&](const std::string& v) { cfg.direct = parseDirectMethod(v); }});
@@ -170,53 +167,75 @@ Arguments parseRender(int argc, char** argv) {
              [&](const std::string& v) { cfg.visibility = parseVisibility(v); }});
     cmd.add({"--coverage-probes", "N",
              "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
-                 std::to_string(defaults.coverageProbes) + ", 0.." + std::to_string(CoverageSettings::kMaxProbes) + "; 0: no correction)",
+                 std::to_string(d.splat.coverageProbes) + ", 0.." + std::to_string(CoverageSettings::kMaxProbes) + "; 0: no correction)",
              [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
     cmd.add({"--min-coverage", "C",
              "the least coverage a photon's flux is divided by: fewer fireflies on thin parts, for a measured bias under 0.5 % "
              "of the indirect light "
-             "(default " + numberText(defaults.minCoverage) + ", 0..1; 0: none)",
+             "(default " + numberText(d.splat.minCoverage) + ", 0..1; 0: none)",
              [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
     cmd.add({"--direct-spp", "N",
              "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
-             "and normal, apart from the photons' receivers (default " + std::to_string(defaults.directSpp) +
+             "and normal, apart from the photons' receivers (default " + std::to_string(d.splat.directSpp) +
                  "; 0: at the receivers)",
              [&](const std::string& v) { cfg.directSpp = parseCount<int>("--direct-spp", v); }});
     cmd.add({"--light-samples", "N", "light samples per direct film sample (or eye sample, with --direct-spp 0) for --direct sample (default " +
-                 std::to_string(defaults.lightSamples) + ")",
+                 std::to_string(d.splat.lightSamples) + ")",
              [&](const std::string& v) { cfg.lightSamples = parseNumber<int>("--light-samples", v); }});
-    cmd.add({"--photons", "M", "photon rays stored per pass (default " + std::to_string(defaults.photons) + "; also 1e6, 2M, 500k)",
-             [&](const std::string& v) { cfg.photons = parseCount<int64_t>("--photons", v); }});
-    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default " + tripleText(defaults.photonSplit()) +
-                                     "; with --direct photons " + tripleText(paper.photonSplit()) + ")",
-             [&](const std::string& v) {
-                 parseTriple("--split", v, cfg.split);
-                 cfg.splitSet = true;
-             }});
-    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default " + tripleText(defaults.kernelPhotons) + ")",
-             [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
-    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default " + tripleText(defaults.minRadius) + ")",
-             [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
-    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default " + tripleText(defaults.maxRadius) + ")",
-             [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
-    cmd.add({"--max-depth", "N", "longest path, in vertices (default " + std::to_string(defaults.maxDepth) + ")",
-             [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
-    cmd.add({"--passes", "N", "passes to render and average (default: splat " + std::to_string(defaults.passCount()) +
-                                  ", each new eye samples and photons; path " + std::to_string(path.passCount()) +
+    cmd.add({"--passes", "N", "passes to render and average (default: splat " + std::to_string(d.splat.passCount()) +
+                                  ", each new eye samples and photons; path " + std::to_string(d.path.passCount()) +
                                   " of --spp; 0: the method's)",
              [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
     cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
-    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default " + numberText(defaults.alpha) + ")",
+    cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(d.splat.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
+    cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
+             [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
+    cmd.add({"--photon", "PASS:INDEX",
+             "replay one photon ray (debugging): the image is the splat of ray INDEX of pass PASS alone, and its record "
+             "(class, ends, flux, radius, reach, coverage, eye samples reached) is printed; with a --seed, the same ray as "
+             "in the full render",
+             [&](const std::string& v) {
+                 const size_t colon = v.find(':');
+                 if (colon == std::string::npos) throw Error(ErrorKind::Config, "--photon " + v + ": not PASS:INDEX");
+                 cfg.replayPass = parseNumber<int>("--photon", v.substr(0, colon));
+                 cfg.replayIndex = parseCount<int64_t>("--photon", v.substr(colon + 1));
+                 if (cfg.replayPass < 0) throw Error(ErrorKind::Config, "--photon " + v + ": the pass is negative");
+             }});
+}
+
+// The photons and their kernels.
+void addPhotonOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
+    cmd.add({"--photons", "M", "photon rays stored per pass (default " + std::to_string(d.splat.photons) + "; also 1e6, 2M, 500k)",
+             [&](const std::string& v) { cfg.photons = parseCount<int64_t>("--photons", v); }});
+    cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default " + tripleText(d.splat.photonSplit()) +
+                                     "; with --direct photons " + tripleText(d.paper.photonSplit()) + ")",
+             [&](const std::string& v) {
+                 parseTriple("--split", v, cfg.split);
+                 cfg.splitSet = true;
+             }});
+    cmd.add({"--kernel-photons", "D,I,C", "photons aimed for under one kernel, per class (default " + tripleText(d.splat.kernelPhotons) + ")",
+             [&](const std::string& v) { parseTriple("--kernel-photons", v, cfg.kernelPhotons); }});
+    cmd.add({"--min-radius", "D,I,C", "smallest splat radius in voxels, per class (default " + tripleText(d.splat.minRadius) + ")",
+             [&](const std::string& v) { parseTriple("--min-radius", v, cfg.minRadius); }});
+    cmd.add({"--max-radius", "D,I,C", "largest splat radius in voxels, per class (default " + tripleText(d.splat.maxRadius) + ")",
+             [&](const std::string& v) { parseTriple("--max-radius", v, cfg.maxRadius); }});
+    cmd.add({"--max-depth", "N", "longest path, in vertices (default " + std::to_string(d.splat.maxDepth) + ")",
+             [&](const std::string& v) { cfg.maxDepth = parseNumber<int>("--max-depth", v); }});
+    cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default " + numberText(d.splat.alpha) + ")",
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});
+}
+
+// The sky.
+void addSkyOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
     cmd.add({"--env", "FILE",
              "environment light: an equirectangular OpenEXR or Radiance .hdr, oriented as Blender's world (its centre column along +X, "
              "its top row up), seen through openings, sampled for direct light and sending photons",
              [&](const std::string& v) { cfg.env = v; }});
-    cmd.add({"--env-strength", "S", "multiplies the --env image (default " + numberText(defaults.envStrength) + ")",
+    cmd.add({"--env-strength", "S", "multiplies the --env image (default " + numberText(d.splat.envStrength) + ")",
              [&](const std::string& v) { cfg.envStrength = parseFloat("--env-strength", v); }});
     cmd.add({"--env-rotation", "DEG", "turns the --env image about the up axis as Blender's Mapping node Z rotation in the world shader does (default " +
-                                          numberText(defaults.envRotation) + ")",
+                                          numberText(d.splat.envRotation) + ")",
              [&](const std::string& v) { cfg.envRotation = parseFloat("--env-rotation", v); }});
     cmd.add({"--sky", "R,G,B", "a uniform sky of this radiance, W/(m^2 sr) (one number: grey; default none)",
              [&](const std::string& v) {
@@ -229,29 +248,36 @@ Arguments parseRender(int argc, char** argv) {
                  }
                  cfg.sky = Vec3(c[0], c[1], c[2]);
              }});
-    cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
-    cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(defaults.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
-    cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
-             [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
-    cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(defaults.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
+}
+
+}  // namespace
+
+Arguments parseRender(int argc, char** argv) {
+    Arguments args;
+    RenderConfig& cfg = args.cfg;
+    const RenderDefaults d;
+    Command cmd("raysplat render SCENE -o OUT.exr [options]",
+                "Renders SCENE (.gltf or .glb) and writes a float OpenEXR with the beauty image and the layers\n"
+                "direct, indirect, caustic, emission, albedo and normal. The default method is photon ray splatting\n"
+                "(Herzog & Seidel 2007): " + std::to_string(d.splat.passCount()) + " passes of eye pass, tree of eye samples, photons and splatting, averaged,\n"
+                "with kernels shrinking from pass to pass. Direct light and emission are sampled in a film of their\n"
+                "own camera samples, as a path tracer does, and a photon reaches the eye samples that see its\n"
+                "origin, its kernel's light kept whole past edges and corners. '--direct photons --passes 1' is\n"
+                "the paper's own estimator (" + std::to_string(d.paper.samplesPerPixel()) + " samples a pixel, " + std::to_string(d.paper.photons) +
+                " photons split " + splitPercent(d.paper.photonSplit()) + ", GPU voxelization\n"
+                "into an occlusion mask of grid " + std::to_string(d.paper.grid) + ", no coverage correction). Outputs are written atomically: a\n"
+                "failed run leaves no file behind. Under mpirun (a build with Open MPI) the passes, or with fewer\n"
+                "passes than ranks each pass's photons, are divided between the ranks: the same image. Scenes may\n"
+                "be lit by a sky (--env, --sky, or the glTF scene's extras raysplat_sky / raysplat_env); nodes whose\n"
+                "extras set raysplat_portal are light portals (windows): the sun's and the sky's photons enter\n"
+                "through them. glTF alphaMode MASK and BLEND cut surfaces everywhere, the voxel grid included.");
+    addOutputOptions(cmd, cfg, d);
+    addSamplingOptions(cmd, cfg, d);
+    addPhotonOptions(cmd, cfg, d);
+    addSkyOptions(cmd, cfg, d);
     addGridOptions(cmd, cfg);
     cmd.add({"--vdb", "FILE", "also write the occlusion grid as OpenVDB (opens in Blender as a volume)",
              [&](const std::string& v) { cfg.vdb = v; }});
-    cmd.add({"--photon", "PASS:INDEX",
-             "replay one photon ray (debugging): the image is the splat of ray INDEX of pass PASS alone, and its record "
-             "(class, ends, flux, radius, reach, coverage, eye samples reached) is printed; with a --seed, the same ray as "
-             "in the full render",
-             [&](const std::string& v) {
-                 const size_t colon = v.find(':');
-                 if (colon == std::string::npos) throw Error(ErrorKind::Config, "--photon " + v + ": not PASS:INDEX");
-                 cfg.replayPass = parseNumber<int>("--photon", v.substr(0, colon));
-                 cfg.replayIndex = parseCount<int64_t>("--photon", v.substr(colon + 1));
-                 if (cfg.replayPass < 0) throw Error(ErrorKind::Config, "--photon " + v + ": the pass is negative");
-             }});
-    cmd.add({"--blender-layer", "NAME",
-             "name the EXR's channels as Blender's multilayer EXR of view layer NAME: NAME.Combined.RGBA, NAME.Direct.RGB, "
-             "... NAME.Albedo.RGB, NAME.Normal.XYZ (Blender's axes), which Blender opens as passes",
-             [&](const std::string& v) { cfg.blenderLayer = v; }});
     addQuietOption(cmd, args);
     cmd.add({"--defaults", "", "print the defaults of the settings above as one JSON object, and exit",
              [&](const std::string&) { args.defaults = true; }});
