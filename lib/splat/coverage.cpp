@@ -73,18 +73,6 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
 
 }  // namespace
 
-void CoverageStats::add(const CoverageStats& o) {
-    photons += o.photons, partial += o.partial, uncovered += o.uncovered, shrunk += o.shrunk;
-    coverageSum += o.coverageSum;
-}
-
-void CoverageStats::report(Stats& stats) const {
-    stats.setCount("coverage_photons_partial", double(partial));
-    stats.setCount("coverage_photons_uncovered", double(uncovered));
-    stats.setCount("coverage_photons_shrunk", double(shrunk));
-    stats.setCount("coverage_mean", photons ? coverageSum / double(photons) : 1.0);
-}
-
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
                              ThreadPool& pool, Reporter& reporter, CoverageStats* statsOut) {
     constexpr int64_t kChunk = 1024;

@@ -11,13 +11,14 @@
 
 #include <cstdint>
 
+#include "core/stats.h"
+
 namespace rs {
 
 class RayAccel;
 class ThreadPool;
 class Reporter;
 struct PhotonMap;
-struct Stats;
 
 struct CoverageSettings {
     static constexpr int kMaxProbes = 16;  // one Embree packet
@@ -49,12 +50,22 @@ struct CoverageSettings {
     uint64_t pass = 0;
 };
 
+// Photons probed; with coverage below 1; with none; kernels
+// halved (coverage below kShrinkBelow).
+#define RS_COVERAGE_COUNTERS(X)                                                                      \
+    X(photons, "coverage_photons") X(partial, "coverage_photons_partial")                            \
+    X(uncovered, "coverage_photons_uncovered") X(shrunk, "coverage_photons_shrunk")
 struct CoverageStats {
-    uint64_t photons = 0, partial = 0, uncovered = 0;  // photons probed; with coverage below 1; with none
-    uint64_t shrunk = 0;                               // kernels halved (coverage below kShrinkBelow)
-    double coverageSum = 0.0;                          // sum of the photons' coverage
-    void add(const CoverageStats& o);
-    void report(Stats& stats) const;
+    RS_COVERAGE_COUNTERS(RS_COUNTER_MEMBER)
+    double coverageSum = 0.0;  // sum of the photons' coverage
+    void add(const CoverageStats& o) {
+        RS_COVERAGE_COUNTERS(RS_COUNTER_ADD)
+        coverageSum += o.coverageSum;
+    }
+    void report(Stats& stats) const {
+        RS_COVERAGE_COUNTERS(RS_COUNTER_REPORT)
+        stats.setCount("coverage_mean", photons ? coverageSum / double(photons) : 1.0);
+    }
 };
 
 // Measures each photon ray's kernel coverage c, halves the kernel and measures again where c <
