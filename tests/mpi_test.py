@@ -109,7 +109,7 @@ def test_ctrl_c_stops_every_rank_cleanly():
 
 
 def test_bad_settings_are_said_once():
-    r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "0")
+    r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "-1")
     errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
     cli.check(r.returncode != 0 and len(errors) == 1, "exit %d, error lines %r" % (r.returncode, errors))
 

@@ -216,17 +216,17 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
     __m128 d[3], half[3], valid = _mm_castsi128_ps(_mm_set1_epi32(-1));
     for (int a = 0; a < 3; ++a) {
         valid = _mm_and_ps(valid, _mm_cmple_ps(lo[a], hi[a]));
-        d[a] = _mm_sub_ps(_mm_mul_ps(halfOf, _mm_add_ps(lo[a], hi[a])), wide_.o[a]);
+        d[a] = _mm_sub_ps(_mm_mul_ps(halfOf, _mm_add_ps(lo[a], hi[a])), four_.o[a]);
         half[a] = _mm_mul_ps(halfOf, _mm_sub_ps(hi[a], lo[a]));
     }
-    const __m128 along = dot4(wide_.w, d[0], d[1], d[2]), spreadW = dot4(wide_.absW, half[0], half[1], half[2]);
-    const __m128 spreadN = dot4(wide_.absN, half[0], half[1], half[2]), dn = dot4(wide_.n, d[0], d[1], d[2]);
+    const __m128 along = dot4(four_.w, d[0], d[1], d[2]), spreadW = dot4(four_.absW, half[0], half[1], half[2]);
+    const __m128 spreadN = dot4(four_.absN, half[0], half[1], half[2]), dn = dot4(four_.n, d[0], d[1], d[2]);
     const __m128 halfLength = _mm_sqrt_ps(dot4(half, half[0], half[1], half[2]));
     const __m128 off2 = _mm_sub_ps(dot4(d, d[0], d[1], d[2]), _mm_mul_ps(along, along));
     // boxMayBeReached.
     const __m128 slackM = _mm_set1_ps(kBoxReachSlack), spreadM = _mm_add_ps(spreadW, slackM);
     __m128 m = _mm_and_ps(valid, _mm_and_ps(_mm_cmpnle_ps(_mm_add_ps(along, spreadM), zero),
-                                            _mm_cmpngt_ps(_mm_sub_ps(along, spreadM), wide_.length)));
+                                            _mm_cmpngt_ps(_mm_sub_ps(along, spreadM), four_.length)));
     if (hasNormal_) m = _mm_and_ps(m, _mm_cmpnle_ps(_mm_add_ps(_mm_add_ps(dn, spreadN), slackM), zero));
     const __m128 reach = _mm_add_ps(_mm_add_ps(_mm_set1_ps(radius_), halfLength), slackM);
     m = _mm_and_ps(m, _mm_cmplt_ps(off2, _mm_mul_ps(reach, reach)));
@@ -236,18 +236,18 @@ void CylinderTraversal::boxTests4(const __m128 lo[3], const __m128 hi[3], uint32
     const __m128 slack = _mm_add_ps(_mm_set1_ps(kSureSlack), _mm_mul_ps(_mm_set1_ps(kSureSlackPerSize), size));
     const __m128 slack2 = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(kSureSlack2PerSize2), size), size);
     __m128 s = _mm_and_ps(valid, _mm_and_ps(_mm_cmpgt_ps(_mm_sub_ps(along, spreadW), slack),
-                                            _mm_cmple_ps(_mm_add_ps(along, spreadW), _mm_sub_ps(wide_.length, slack))));
+                                            _mm_cmple_ps(_mm_add_ps(along, spreadW), _mm_sub_ps(four_.length, slack))));
     if (hasNormal_) s = _mm_and_ps(s, _mm_cmpgt_ps(_mm_sub_ps(dn, spreadN), slack));
     const __m128 farthest = _mm_add_ps(_mm_add_ps(_mm_sqrt_ps(_mm_add_ps(_mm_max_ps(off2, zero), slack2)), halfLength), slack);
-    s = _mm_and_ps(s, _mm_cmplt_ps(_mm_add_ps(_mm_mul_ps(farthest, farthest), slack2), wide_.kernel2));
+    s = _mm_and_ps(s, _mm_cmplt_ps(_mm_add_ps(_mm_mul_ps(farthest, farthest), slack2), four_.kernel2));
     sure = uint32_t(_mm_movemask_ps(s)) & may;
     if (!sure) return;
-    const __m128 u = dot4(wide_.aU, d[0], d[1], d[2]), du = _mm_add_ps(dot4(wide_.absAU, half[0], half[1], half[2]), slack);
-    const __m128 v = dot4(wide_.aV, d[0], d[1], d[2]), dv = _mm_add_ps(dot4(wide_.absAV, half[0], half[1], half[2]), slack);
-    _mm_store_si128(reinterpret_cast<__m128i*>(rect[0]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(u, du), halfOf)), wide_.halfU));
-    _mm_store_si128(reinterpret_cast<__m128i*>(rect[1]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(u, du), halfOf)), wide_.halfU));
-    _mm_store_si128(reinterpret_cast<__m128i*>(rect[2]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(v, dv), halfOf)), wide_.halfV));
-    _mm_store_si128(reinterpret_cast<__m128i*>(rect[3]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(v, dv), halfOf)), wide_.halfV));
+    const __m128 u = dot4(four_.aU, d[0], d[1], d[2]), du = _mm_add_ps(dot4(four_.absAU, half[0], half[1], half[2]), slack);
+    const __m128 v = dot4(four_.aV, d[0], d[1], d[2]), dv = _mm_add_ps(dot4(four_.absAV, half[0], half[1], half[2]), slack);
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[0]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(u, du), halfOf)), four_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[1]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(u, du), halfOf)), four_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[2]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_sub_ps(v, dv), halfOf)), four_.halfV));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rect[3]), _mm_add_epi32(floorToInt4(_mm_sub_ps(_mm_add_ps(v, dv), halfOf)), four_.halfV));
 }
 #endif
 
@@ -349,24 +349,24 @@ uint32_t CylinderTraversal::reach4(const Vec3* world, Reach4& r) const {
                                      _MM_SHUFFLE(2, 0, 2, 0));
     const __m128 wz = _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)), _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)),
                                      _MM_SHUFFLE(2, 0, 2, 0));
-    const __m128 p[3] = {_mm_mul_ps(_mm_sub_ps(wx, wide_.gridOrigin[0]), wide_.invVoxel),
-                         _mm_mul_ps(_mm_sub_ps(wy, wide_.gridOrigin[1]), wide_.invVoxel),
-                         _mm_mul_ps(_mm_sub_ps(wz, wide_.gridOrigin[2]), wide_.invVoxel)};
-    const __m128 dx = _mm_sub_ps(p[0], wide_.o[0]), dy = _mm_sub_ps(p[1], wide_.o[1]), dz = _mm_sub_ps(p[2], wide_.o[2]);
+    const __m128 p[3] = {_mm_mul_ps(_mm_sub_ps(wx, four_.gridOrigin[0]), four_.invVoxel),
+                         _mm_mul_ps(_mm_sub_ps(wy, four_.gridOrigin[1]), four_.invVoxel),
+                         _mm_mul_ps(_mm_sub_ps(wz, four_.gridOrigin[2]), four_.invVoxel)};
+    const __m128 dx = _mm_sub_ps(p[0], four_.o[0]), dy = _mm_sub_ps(p[1], four_.o[1]), dz = _mm_sub_ps(p[2], four_.o[2]);
     uint32_t bits = 15u;
     if constexpr (kTest) {
-        const __m128 along = dot4(wide_.w, dx, dy, dz);
+        const __m128 along = dot4(four_.w, dx, dy, dz);
         const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-        __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length));
-        ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), wide_.kernel2));
-        if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(wide_.n, dx, dy, dz), _mm_setzero_ps()));
+        __m128 ok = _mm_and_ps(_mm_cmpgt_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, four_.length));
+        ok = _mm_and_ps(ok, _mm_cmpnge_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), four_.kernel2));
+        if (hasNormal_) ok = _mm_and_ps(ok, _mm_cmpnle_ps(dot4(four_.n, dx, dy, dz), _mm_setzero_ps()));
         bits = uint32_t(_mm_movemask_ps(ok));
         if (!bits) return 0;
     }
-    const __m128 u = dot4(wide_.aU, dx, dy, dz), v = dot4(wide_.aV, dx, dy, dz), half = _mm_set1_ps(0.5f);
+    const __m128 u = dot4(four_.aU, dx, dy, dz), v = dot4(four_.aV, dx, dy, dz), half = _mm_set1_ps(0.5f);
     _mm_store_ps(r.u, u), _mm_store_ps(r.v, v);
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floorToInt4(_mm_sub_ps(u, half)), wide_.halfU));
-    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floorToInt4(_mm_sub_ps(v, half)), wide_.halfV));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.i0), _mm_add_epi32(floorToInt4(_mm_sub_ps(u, half)), four_.halfU));
+    _mm_store_si128(reinterpret_cast<__m128i*>(r.j0), _mm_add_epi32(floorToInt4(_mm_sub_ps(v, half)), four_.halfV));
     _mm_store_si128(reinterpret_cast<__m128i*>(r.voxelN), floorToInt4(p[N_]));
     return bits;
 }

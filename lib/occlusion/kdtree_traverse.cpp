@@ -60,15 +60,15 @@ CylinderTraversal::CylinderTraversal(const OcclusionTree& tree, const EyeSamples
     markInvalidCells();
 #if defined(__SSE2__)
     for (int a = 0; a < 3; ++a) {
-        wide_.gridOrigin[a] = _mm_set1_ps(g_.origin[a]), wide_.o[a] = _mm_set1_ps(o_[a]), wide_.w[a] = _mm_set1_ps(w_[a]);
-        wide_.n[a] = _mm_set1_ps(n_[a]), wide_.aU[a] = _mm_set1_ps(aU_[a]), wide_.aV[a] = _mm_set1_ps(aV_[a]);
+        four_.gridOrigin[a] = _mm_set1_ps(g_.origin[a]), four_.o[a] = _mm_set1_ps(o_[a]), four_.w[a] = _mm_set1_ps(w_[a]);
+        four_.n[a] = _mm_set1_ps(n_[a]), four_.aU[a] = _mm_set1_ps(aU_[a]), four_.aV[a] = _mm_set1_ps(aV_[a]);
     }
-    wide_.invVoxel = _mm_set1_ps(invVoxel_), wide_.length = _mm_set1_ps(L_), wide_.kernel2 = _mm_set1_ps(kernel2_);
+    four_.invVoxel = _mm_set1_ps(invVoxel_), four_.length = _mm_set1_ps(L_), four_.kernel2 = _mm_set1_ps(kernel2_);
     for (int a = 0; a < 3; ++a) {
-        wide_.absW[a] = _mm_set1_ps(absW_[a]), wide_.absN[a] = _mm_set1_ps(absN_[a]);
-        wide_.absAU[a] = _mm_set1_ps(absAU_[a]), wide_.absAV[a] = _mm_set1_ps(absAV_[a]);
+        four_.absW[a] = _mm_set1_ps(absW_[a]), four_.absN[a] = _mm_set1_ps(absN_[a]);
+        four_.absAU[a] = _mm_set1_ps(absAU_[a]), four_.absAV[a] = _mm_set1_ps(absAV_[a]);
     }
-    wide_.halfU = _mm_set1_epi32(halfU_), wide_.halfV = _mm_set1_epi32(halfV_);
+    four_.halfU = _mm_set1_epi32(halfU_), four_.halfV = _mm_set1_epi32(halfV_);
 #endif
     s_.occluders.clear();
     s_.samples.clear();
@@ -277,21 +277,21 @@ void CylinderTraversal::gatherBrick(const StackEntry& e, uint32_t index) {
         __m128 d[3];
         for (int a = 0; a < 3; ++a) {
             _mm_store_si128(reinterpret_cast<__m128i*>(v[a]), vi[a]);
-            d[a] = _mm_sub_ps(_mm_add_ps(_mm_cvtepi32_ps(vi[a]), _mm_set1_ps(0.5f)), wide_.o[a]);
+            d[a] = _mm_sub_ps(_mm_add_ps(_mm_cvtepi32_ps(vi[a]), _mm_set1_ps(0.5f)), four_.o[a]);
         }
-        const __m128 along = dot4(wide_.w, d[0], d[1], d[2]);
+        const __m128 along = dot4(four_.w, d[0], d[1], d[2]);
         const __m128 dd = dot4(d, d[0], d[1], d[2]);
-        const __m128 sure = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, wide_.length)),
+        const __m128 sure = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(along, _mm_setzero_ps()), _mm_cmple_ps(along, four_.length)),
                                        _mm_cmplt_ps(_mm_sub_ps(dd, _mm_mul_ps(along, along)), _mm_set1_ps(hOcc_ * hOcc_)));
-        const unsigned front = hasNormal_ ? unsigned(_mm_movemask_ps(_mm_cmpgt_ps(dot4(wide_.n, d[0], d[1], d[2]),
+        const unsigned front = hasNormal_ ? unsigned(_mm_movemask_ps(_mm_cmpgt_ps(dot4(four_.n, d[0], d[1], d[2]),
                                                                                   _mm_set1_ps(tangentOffset_))))
                                           : 15u;
         const unsigned met = unsigned(_mm_movemask_ps(sure));
         if (!front) continue;
         // The centres' cells, projected as addOccluder projects one.
         alignas(16) int cu[4], cv[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floorToInt4(dot4(wide_.aU, d[0], d[1], d[2])), wide_.halfU));
-        _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floorToInt4(dot4(wide_.aV, d[0], d[1], d[2])), wide_.halfV));
+        _mm_store_si128(reinterpret_cast<__m128i*>(cu), _mm_add_epi32(floorToInt4(dot4(four_.aU, d[0], d[1], d[2])), four_.halfU));
+        _mm_store_si128(reinterpret_cast<__m128i*>(cv), _mm_add_epi32(floorToInt4(dot4(four_.aV, d[0], d[1], d[2])), four_.halfV));
         for (int k = 0; k < n; ++k) {
             if (!(front >> k & 1u)) continue;
             if (invalidCell(cu[k], cv[k])) continue;  // before the exact met test

@@ -282,8 +282,10 @@ private:
     void gatherBrick(const StackEntry& e, uint32_t index);
 #if RS_TRAVERSE_AVX512
     void gatherBrickOccluders16(const StackEntry& e, const Brick& brick, uint64_t candidates);
-    __attribute__((target("avx512f"))) size_t addOccluders16(__mmask16 met, __m512i voxel, __m512i layer, __m512i cu, __m512i cv,
-                                                              __mmask16 inMask, size_t n);
+    // Sixteen candidate occluders in AVX-512 registers: defined, with the step that adds them, in
+    // kdtree_traverse_avx512.cpp, so that no sixteen-lane type reaches this header.
+    struct Occluders16;
+    size_t addOccluders16(const Occluders16& c, size_t n);
 #endif
     void gatherOcclusionBlock(const StackEntry& e, Node node);
     // The counts of a brick's voxel: the rank of its bit among the occupied ones is where they are.
@@ -365,10 +367,10 @@ private:
     int sliceMin_ = INT_MAX, sliceMax_ = INT_MIN;  // the sample events' slices
     int occluderMin_ = INT_MAX, occluderMax_ = INT_MIN;  // the occluder events'
 #if defined(__SSE2__)
-    struct Wide {  // reach4's numbers, each in all four lanes, set once a cylinder
+    struct FourLanes {  // reach4's numbers, each in all four lanes, set once a cylinder
         __m128 gridOrigin[3], o[3], w[3], n[3], aU[3], aV[3], absW[3], absN[3], absAU[3], absAV[3], invVoxel, length, kernel2;
         __m128i halfU, halfV;
-    } wide_;
+    } four_;
 #endif
 };
 

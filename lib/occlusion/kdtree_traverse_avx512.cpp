@@ -20,6 +20,14 @@ using namespace kd_detail;
 
 #if RS_TRAVERSE_AVX512
 
+struct CylinderTraversal::Occluders16 {
+    __mmask16 met;   // the lanes that are met voxels
+    __m512i voxel;   // their occlusion counts
+    __m512i layer;   // their layer along N
+    __m512i cu, cv;  // their centres' mask cell
+    __mmask16 inMask;
+};
+
 namespace {
 
 // Lane l of a deinterleave of 48 packed floats (16 xyz triples in three vectors a, b, c):
@@ -269,7 +277,7 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
         }
         const __m512i voxel = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), met, _mm512_maskz_loadu_epi32(met, at),
                                                           voxels, 4);
-        n = addOccluders16(met, voxel, vi[N_], cu, cv, inMask, n);
+        n = addOccluders16(Occluders16{met, voxel, vi[N_], cu, cv, inMask}, n);
     }
     s_.occluders.resize(n);
 }
@@ -277,8 +285,9 @@ __attribute__((target("avx512f"))) void CylinderTraversal::gatherBrickOccluders1
 // addOccluderAt for the `met` lanes (voxel counts, layer along N, cell), the same operations in
 // the same order, so the same events in the same (bit) order, written at s_.occluders[n]; returns
 // the list's new end.
-__attribute__((target("avx512f"))) size_t CylinderTraversal::addOccluders16(__mmask16 met, __m512i voxel, __m512i layer, __m512i cu,
-                                                                             __m512i cv, __mmask16 inMask, size_t n) {
+__attribute__((target("avx512f"))) size_t CylinderTraversal::addOccluders16(const Occluders16& c, size_t n) {
+    const __mmask16 met = c.met, inMask = c.inMask;
+    const __m512i voxel = c.voxel, layer = c.layer, cu = c.cu, cv = c.cv;
     // occ = min(1, Σ_a occWeight_a · count(side_a)), summed from a = 0 as addOccluderAt does.
     __m512 occ = _mm512_setzero_ps();
     for (int a = 0; a < 3; ++a) {

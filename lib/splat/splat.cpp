@@ -158,9 +158,9 @@ Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility
 
 #if defined(__SSE2__)
 // Four samples' vectors, a lane each.
-struct Lanes {
+struct Lanes4 {
     __m128 x, y, z;
-    static Lanes of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    static Lanes4 of(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
         return {_mm_setr_ps(a.x, b.x, c.x, d.x), _mm_setr_ps(a.y, b.y, c.y, d.y), _mm_setr_ps(a.z, b.z, c.z, d.z)};
     }
     __m128 dot(const __m128 v[3]) const { return dot4(v, x, y, z); }
@@ -178,10 +178,10 @@ public:
           stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes), pending_(receivers_, stats) {
 #if defined(__SSE2__)
         for (int a = 0; a < 3; ++a) {
-            wide_.origin[a] = _mm_set1_ps(ray.origin[a]), wide_.dir[a] = _mm_set1_ps(ray.dir[a]);
-            wide_.flux[a] = _mm_set1_ps(ray.flux[a]), wide_.originNormal[a] = _mm_set1_ps(receivers_.originNormal()[a]);
+            four_.origin[a] = _mm_set1_ps(ray.origin[a]), four_.dir[a] = _mm_set1_ps(ray.dir[a]);
+            four_.flux[a] = _mm_set1_ps(ray.flux[a]), four_.originNormal[a] = _mm_set1_ps(receivers_.originNormal()[a]);
         }
-        wide_.end = _mm_set1_ps(end_), wide_.h2 = _mm_set1_ps(h2_), wide_.kernelScale = _mm_set1_ps(kernelScale_);
+        four_.end = _mm_set1_ps(end_), four_.h2 = _mm_set1_ps(h2_), four_.kernelScale = _mm_set1_ps(kernelScale_);
 #endif
     }
 
@@ -276,8 +276,8 @@ private:
     }
 #if defined(__SSE2__)
     void receive4(const uint32_t* index, const float* visibility, int count);
-    Lanes weightedF4(const uint32_t lane[4], uint32_t live, const Lanes& n, __m128 minusCos) const;
-    void deposit4(const uint32_t lane[4], uint32_t live, const Lanes& y, const Lanes& ng, const Lanes& c);
+    Lanes4 weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const;
+    void deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& y, const Lanes4& ng, const Lanes4& c);
     uint32_t waiting_[4];  // samples of the sweep waiting for a batch of four
     float waitingV_[4];
     int waitingCount_ = 0;
@@ -293,54 +293,54 @@ private:
     const SegmentReceivers receivers_;
     PendingContributions pending_;
 #if defined(__SSE2__)
-    struct Wide {  // the ray's numbers for receive4, each in all four lanes, set once a photon
+    struct FourLanes {  // the ray's numbers for receive4, each in all four lanes, set once a photon
         __m128 origin[3], dir[3], flux[3], originNormal[3], end, h2, kernelScale;
-    } wide_;
+    } four_;
 #endif
 };
 
 #if defined(__SSE2__)
 // receiveOne(index[k], visibility[k] or 1) for up to four samples (with visibility): every step
 // the same operations in the same order, one lane a sample, so the same sums; the BSDF is read
-// lane by lane. Lanes past `count` repeat the first sample and are dropped.
+// lane by lane. Lanes4 past `count` repeat the first sample and are dropped.
 void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int count) {
     const uint32_t lane[4] = {index[0], count > 1 ? index[1] : index[0], count > 2 ? index[2] : index[0],
                               count > 3 ? index[3] : index[0]};
     const Vec3* pos = samples_.position.data();
-    const Lanes y = Lanes::of(pos[lane[0]], pos[lane[1]], pos[lane[2]], pos[lane[3]]);
+    const Lanes4 y = Lanes4::of(pos[lane[0]], pos[lane[1]], pos[lane[2]], pos[lane[3]]);
     const uint16_t* nc = samples_.normal.data();
     const uint16_t* gc = samples_.geomNormal.data();
-    const Lanes n = Lanes::of(units_[nc[lane[0]]], units_[nc[lane[1]]], units_[nc[lane[2]]], units_[nc[lane[3]]]);
-    const Lanes ng = Lanes::of(units_[gc[lane[0]]], units_[gc[lane[1]]], units_[gc[lane[2]]], units_[gc[lane[3]]]);
-    const Lanes oy{_mm_sub_ps(y.x, wide_.origin[0]), _mm_sub_ps(y.y, wide_.origin[1]), _mm_sub_ps(y.z, wide_.origin[2])};
+    const Lanes4 n = Lanes4::of(units_[nc[lane[0]]], units_[nc[lane[1]]], units_[nc[lane[2]]], units_[nc[lane[3]]]);
+    const Lanes4 ng = Lanes4::of(units_[gc[lane[0]]], units_[gc[lane[1]]], units_[gc[lane[2]]], units_[gc[lane[3]]]);
+    const Lanes4 oy{_mm_sub_ps(y.x, four_.origin[0]), _mm_sub_ps(y.y, four_.origin[1]), _mm_sub_ps(y.z, four_.origin[2])};
     const __m128 zero = _mm_setzero_ps();
     // Inside the kernel, facing the photon (negated rejections: a NaN is rejected).
-    const __m128 t = oy.dot(wide_.dir);
-    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, wide_.end));
+    const __m128 t = oy.dot(four_.dir);
+    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, four_.end));
     const __m128 d2 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(oy.x, oy.x), _mm_mul_ps(oy.y, oy.y)), _mm_mul_ps(oy.z, oy.z)),
                                  _mm_mul_ps(t, t));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, wide_.h2));
-    const __m128 cosTheta = n.dot(wide_.dir);
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, four_.h2));
+    const __m128 cosTheta = n.dot(four_.dir);
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(cosTheta, zero));
-    ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(wide_.dir), zero));
+    ok = _mm_and_ps(ok, _mm_cmpnge_ps(ng.dot(four_.dir), zero));
     uint32_t live = uint32_t(_mm_movemask_ps(ok)) & ((1u << count) - 1u);
     if (!live) return;
     // Rule 1: in front of the origin's tangent plane.
-    const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(wide_.originNormal), zero))) : 15u;
+    const uint32_t front = receivers_.hasOriginNormal() ? uint32_t(_mm_movemask_ps(_mm_cmpgt_ps(oy.dot(four_.originNormal), zero))) : 15u;
     if (const uint32_t behind = live & ~front) stats_.refusedBehindOrigin += uint64_t(__builtin_popcount(behind));
     live &= front;
     if (!live) return;
     // Equation (2): w · f_r · Φ · biweightKernel(max(d2, 0), h2) · −cos θ · V.
-    const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), wide_.h2));
-    const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(wide_.kernelScale, x), x));
+    const __m128 x = _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(_mm_max_ps(d2, zero), four_.h2));
+    const __m128 kernel = _mm_and_ps(_mm_cmpnle_ps(x, zero), _mm_mul_ps(_mm_mul_ps(four_.kernelScale, x), x));
     const __m128 minusCos = _mm_sub_ps(zero, cosTheta);
     const __m128 v = visibility ? _mm_setr_ps(visibility[0], count > 1 ? visibility[1] : 1.f, count > 2 ? visibility[2] : 1.f,
                                               count > 3 ? visibility[3] : 1.f)
                                 : _mm_set1_ps(1.f);
     const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
-    const Lanes f = weightedF4(lane, live, n, minusCos);
-    const Lanes c{_mm_mul_ps(_mm_mul_ps(f.x, wide_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(f.y, wide_.flux[1]), scale),
-                  _mm_mul_ps(_mm_mul_ps(f.z, wide_.flux[2]), scale)};
+    const Lanes4 f = weightedF4(lane, live, n, minusCos);
+    const Lanes4 c{_mm_mul_ps(_mm_mul_ps(f.x, four_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(f.y, four_.flux[1]), scale),
+                  _mm_mul_ps(_mm_mul_ps(f.z, four_.flux[2]), scale)};
     // Non-negative and finite.
     const __m128 inf = _mm_set1_ps(INFINITY);
     __m128 good = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(c.x, zero), _mm_cmplt_ps(c.x, inf)),
@@ -352,12 +352,12 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
 
 // The samples' w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once);
 // a glossy one's lobe is evaluated lane by lane.
-Lanes PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lanes& n, __m128 minusCos) const {
+Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const {
     const uint32_t* bsdf = samples_.bsdf.data();
     const __m128i word = _mm_setr_epi32(int(bsdf[lane[0]]), int(bsdf[lane[1]]), int(bsdf[lane[2]]), int(bsdf[lane[3]]));
     const __m128i nine = _mm_set1_epi32(511);
     const __m128 unit = _mm_castsi128_ps(_mm_slli_epi32(_mm_add_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(127 - 24)), 23));
-    Lanes f{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
+    Lanes4 f{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 9), nine)), unit),
             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 18), nine)), unit)};
     const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
@@ -377,11 +377,11 @@ Lanes PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lanes
 
 // Rule 2 for the live lanes, lifted off their surfaces (SegmentReceivers::lift): into the film
 // when the triangles near the cylinder decide it, else to Embree.
-void PhotonSplat::deposit4(const uint32_t lane[4], uint32_t live, const Lanes& y, const Lanes& ng, const Lanes& c) {
+void PhotonSplat::deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& y, const Lanes4& ng, const Lanes4& c) {
     const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 largest = _mm_max_ps(_mm_and_ps(y.x, absMask), _mm_max_ps(_mm_and_ps(y.y, absMask), _mm_and_ps(y.z, absMask)));
     const __m128 lift = _mm_mul_ps(_mm_set1_ps(1e-4f), _mm_add_ps(_mm_set1_ps(1.f), largest));
-    const Lanes lifted{_mm_add_ps(y.x, _mm_mul_ps(lift, ng.x)), _mm_add_ps(y.y, _mm_mul_ps(lift, ng.y)),
+    const Lanes4 lifted{_mm_add_ps(y.x, _mm_mul_ps(lift, ng.x)), _mm_add_ps(y.y, _mm_mul_ps(lift, ng.y)),
                        _mm_add_ps(y.z, _mm_mul_ps(lift, ng.z))};
     const uint32_t visible = receivers_.surelyVisible4(lifted.x, lifted.y, lifted.z);
     alignas(16) float cx[4], cy[4], cz[4], lx[4], ly[4], lz[4];
