@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from blender_check import FAIL, SKIP, Checks, reexec_under_bpy_python, world_bounds_of_meshes  # noqa: E402
+from blender_check import FAIL, SKIP, Checks, exit_without_teardown, reexec_under_bpy_python, world_bounds_of_meshes  # noqa: E402
 from addon_zip import make_zip  # noqa: E402
 
 W, H = 64, 48
@@ -279,10 +279,8 @@ def main():
                 f"the grid's bounds meet the meshes' within a leaf ({leaf:.3f} m)")
     for d in kept + [work]:
         shutil.rmtree(d, ignore_errors=True)
-    return c.finish("blender_addon_check")
+    return c.finish("blender_addon_check", "the add-on renders as the command does")
 
 
 if __name__ == "__main__":
-    status = main()
-    sys.stdout.flush()
-    os._exit(status)  # bpy 4.2 may crash while the interpreter shuts down (see blender_check.py)
+    exit_without_teardown(main())

@@ -25,7 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import blender_check  # noqa: E402
-from blender_check import FAIL, SKIP, Checks  # noqa: E402
+from blender_check import FAIL, SKIP, Checks, exit_without_teardown  # noqa: E402
 
 W, H = 64, 32
 ROTATION = 30.0  # degrees
@@ -140,15 +140,8 @@ def main():
             c.check(abs(got[0] - want[0]) < 2e-3 and abs(got[1] - want[1]) < 2e-3,
                     f"{name}, turned {rotation:g}°: raysplat reads column/row ({got[0]:.4f}, {got[1]:.4f}), "
                     f"Cycles ({want[0]:.4f}, {want[1]:.4f})")
-    if c.failed:
-        say(f"FAIL: {len(c.failed)} of {c.count} checks failed")
-        return FAIL
-    say(f"PASS: {c.count} checks (raysplat's --env and --env-rotation look as Blender's world)")
-    return 0
+    return c.finish("blender_env_check", "raysplat's --env and --env-rotation look as Blender's world")
 
 
 if __name__ == "__main__":
-    status = main()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(status)  # bpy 4.2 may crash while the interpreter shuts down (see blender_check.py)
+    exit_without_teardown(main())

@@ -42,14 +42,7 @@ Scene cardOverFloor(AlphaMode mode, bool checker) {
     sun.direction = Vec3(0, -1, 0);
     sun.intensity = Vec3(kPi);
     s.lights.push_back(sun);
-    Camera c;
-    c.position = {0, 100, 0};
-    c.forward = {0, -1, 0};
-    c.up = {0, 0, -1};
-    c.right = glm::cross(c.forward, c.up);
-    c.yfov = 2.f * std::atan(0.8f / 99.f);
-    c.aspect = 1.f;
-    s.cameras.push_back(c);
+    s.cameras.push_back(lookAt({0, 100, 0}, {0, 0, 0}, {0, 0, -1}, 2.f * std::atan(0.8f / 99.f)));
     s.computeBounds();
     return s;
 }
