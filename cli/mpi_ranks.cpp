@@ -1,5 +1,6 @@
 // Ranks over MPI: agreement is one MPI_Allreduce (MIN) of two integers, the film's reduction
-// one MPI_Reduce (SUM) of 64-bit integers per buffer, whose sum does not depend on its order.
+// one MPI_Reduce (SUM) of 64-bit integers per buffer, whose sum does not depend on its order,
+// and rank 0's decisions one MPI_Bcast.
 #include "mpi_ranks.h"
 
 #include <climits>
@@ -54,6 +55,8 @@ public:
         else
             MPI_Reduce(values.data(), nullptr, count, MPI_INT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
     }
+
+    void broadcast(double* values, int count) override { MPI_Bcast(values, count, MPI_DOUBLE, 0, MPI_COMM_WORLD); }
 
 private:
     int rank_ = 0, size_ = 1, local_ = 1;

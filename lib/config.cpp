@@ -93,6 +93,7 @@ void RenderConfig::validate() const {
     requireRange("min-coverage", minCoverage, 0, 1);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
+    if (kernelScale != 0.f) requireRange("kernel-scale", kernelScale, 0.05, 4);
     requireRange("max-depth", maxDepth, 1, 1024);
     requireRange("threads", threads, 0, 1024);
     requireRange("time-limit", timeLimit, 0, 1e7);
@@ -195,6 +196,7 @@ ImageAttributes RenderConfig::attributes() const {
         if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
         if (directBySampling()) a["directSpp"] = std::to_string(directSpp);
         a["alpha"] = std::to_string(alpha);
+        a["kernelScale"] = kernelScale > 0.f ? std::to_string(kernelScale) : probesKernelScale() ? "auto" : "1";
         a["photons"] = std::to_string(photons);
         a["split"] = tripleText(used);
         a["kernelPhotons"] = tripleText(kernelPhotons);

@@ -68,6 +68,10 @@ struct RenderConfig {
     double timeLimit = 0.0;  // seconds; > 0: render passes until the time is up
     // Kernel shrinkage between passes (Knaus & Zwicker 2011): r²(i+1) = r²(i)·(i + α)/(i + 1).
     float alpha = 2.f / 3.f;
+    // The indirect kernels' scale, after the clamps: > 0 as given; 0 (auto): with direct light
+    // by sampling and more than one pass, chosen by the first pass from the bias and the noise
+    // it measures (splat/kernel_scale.h), else 1.
+    float kernelScale = 0.f;
     float exposure = 0.f;    // PNG preview, stops
     // Non-empty: the EXR's channels are named as Blender's multilayer EXR of this view layer
     // (writeExrTo), as the Blender add-on loads them.
@@ -136,6 +140,10 @@ struct RenderConfig {
         return visibility != Visibility::Auto ? visibility : directBySampling() ? Visibility::Rays : Visibility::Mask;
     }
     // Whether the render needs the voxel grid's occlusion (the mask), not only its geometry.
+    bool probesKernelScale() const {
+        return method == Method::Splat && directBySampling() && kernelScale == 0.f && (timeLimit > 0.0 || passCount() > 1);
+    }
+    float kernelScaleOrOne() const { return kernelScale > 0.f ? kernelScale : 1.f; }
     bool needsMask() const { return method == Method::Splat && visibilityUsed() == Visibility::Mask; }
     // Whether the receiver rules alone decide visibility (kernels reaching to the scene's bounds,
     // their coverage measured).

@@ -28,6 +28,8 @@ public:
 
     // Sums every rank's `values` into rank 0's; the others' are left as they were.
     virtual void sumAtRoot(std::vector<int64_t>& /*values*/) {}
+    // Every rank's `values` become rank 0's.
+    virtual void broadcast(double* /*values*/, int /*count*/) {}
 };
 
 // This process alone.

@@ -14,6 +14,7 @@
 #include "scene/accel.h"
 #include "splat/coverage.h"
 #include "splat/eye.h"
+#include "splat/kernel_scale.h"
 #include "grid/grid_stage.h"
 #include "occlusion/kdtree.h"
 #include "scene/lights.h"
@@ -131,8 +132,11 @@ struct PassShare {
 // (docs/design.md §11) passes go round by round, one pass a rank, pass p to rank p mod N; with
 // fewer passes than ranks every rank renders a share of every pass. After each round the
 // ranks agree: on errors, and (rank 0's clock) on whether another round fits the time limit.
+// With firstShared the first pass is rendered by every rank, a share each, before any other:
+// what it measures decides the passes after it (the kernel scale), and it may say how long
+// they will take (nextSeconds > 0, at rank 0).
 template <class RenderPass>
-Film renderPasses(const RenderContext& c, RenderPass&& pass) {
+Film renderPasses(const RenderContext& c, RenderPass&& pass, bool firstShared = false, const double* nextSeconds = nullptr) {
     Timer t;
     FixedFilm sum(c.width, c.height);
     const bool timed = c.cfg.timeLimit > 0.0;
@@ -145,14 +149,17 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass) {
     double longest = 0.0;
     for (bool more = true; more;) {
         throwIfStopped();
-        const int round = shared ? 1 : timed ? ranks : std::min(ranks, wanted - passes);
+        const bool together = shared || (firstShared && passes == 0 && ranks > 1);
+        const int round = together ? 1 : timed ? ranks : std::min(ranks, wanted - passes);
         Timer one;
-        if (shared)
+        if (together)
             pass(PassShare{passes, me, ranks}, sum);
         else if (me < round)
             pass(PassShare{passes + me, 0, 1}, sum);
+        // The first round's time counts until a second one is timed: it measured for the others.
+        longest = passes == 0 || (firstShared && passes == 1) ? one.seconds() : std::max(longest, one.seconds());
+        if (firstShared && passes == 0 && nextSeconds && *nextSeconds > 0.0) longest = *nextSeconds;
         passes += round;
-        longest = std::max(longest, one.seconds());
         if (several) c.reporter.advance(round);
         // Under a time limit, also no further than the passes whose sample indices fit (maxPasses).
         more = agreeOrStop(c.ranks, timed ? t.seconds() + longest <= c.cfg.timeLimit && passes + ranks <= c.cfg.maxPasses()
@@ -163,13 +170,6 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass) {
     c.stats.setCount("passes", passes);
     // The image is rank 0's; the others have nothing left to do that could fail.
     return me == 0 ? sum.average(passes) : Film();
-}
-
-// The kernel scale of pass p (0-based): r²(n+1) = r²(n)·(n + α)/(n + 1) for passes n = 1, 2, …
-float passRadiusScale(int p, float alpha) {
-    double r2 = 1.0;
-    for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
-    return float(std::sqrt(r2));
 }
 
 Film renderPath(const RenderContext& c) {
@@ -222,6 +222,110 @@ void reportReplayed(const RenderContext& c, const PhotonRay& traced, const Photo
     c.reporter.info(buf);
 }
 
+// The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a quarter of
+// its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
+// each; the halves are summed at rank 0, which chooses the scale m and tells the others. The
+// pass's own indirect light is then the quarter's, at whichever of 1 and ½ is nearer m, and the
+// other three quarters' at m.
+class KernelScaleProbeStep {
+public:
+    KernelScaleProbeStep(const RenderContext& c, const OcclusionTree& tree, const EyePass& eye, const SplatSettings& splat,
+                         CoverageSettings coverage)
+        : c_(c), tree_(tree), eye_(eye), splat_(splat), coverage_(coverage), values_(size_t(c.width) * c.height * 3) {}
+
+    // `indirect`: the pass's indirect photons before their coverage; `other`: seconds of the
+    // pass apart from their splat; `whole`: runs since the passes began. Adds their light to
+    // `sum` and returns the scale chosen.
+    float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, SplatTotals& totals, const Timer& whole,
+              double other) {
+        const size_t quarter = indirect.rays.size() / KernelScaleProbe::kShare;
+        std::vector<int64_t> halves(4 * values_);  // A, B, C, D: the indirect layer of each
+        std::vector<int64_t> mine[2];              // this rank's light of the quarter at 1 and at ½
+        FixedFilm part(c_.width, c_.height);
+        double seconds[2];  // the quarter's splat at 1 and at ½
+        for (int f = 0; f < 2; ++f) {
+            Timer t;
+            const PhotonMap scaled = measured(scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps));
+            mine[f].assign(values_, 0);
+            for (int h = 0; h < 2; ++h) {
+                splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f ? nullptr : &totals.splat);
+                std::copy(part.buffers[kIndirect].begin(), part.buffers[kIndirect].end(), halves.begin() + (2 * f + h) * values_);
+                for (size_t i = 0; i < values_; ++i) mine[f][i] += part.buffers[kIndirect][i];
+            }
+            seconds[f] = t.seconds();
+        }
+        c_.ranks.sumAtRoot(halves);
+
+        double scale = 1.0;
+        if (c_.ranks.rank() == 0) {
+            std::vector<float> light(values_);
+            for (size_t i = 0; i < values_; ++i) {
+                const int ch = int(i % 3);
+                light[i] = eye_.film.layers[kEmission][i / 3][ch] + eye_.film.layers[kDirect][i / 3][ch] +
+                           float(double(halves[i] + halves[values_ + i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
+            }
+            const KernelScaleProbe probe = probeKernelScale(&halves[0], &halves[values_], &halves[2 * values_],
+                                                            &halves[3 * values_], light, FixedFilm::kScale);
+            KernelScalePlan plan;
+            plan.passes = c_.cfg.passCount();
+            plan.alpha = c_.cfg.alpha;
+            if (c_.cfg.timeLimit > 0.0) {  // the user asked for time: the passes are counted by it
+                plan.timed = true;
+                plan.secondsLeft = c_.cfg.timeLimit - whole.seconds();
+                plan.passOther = other;
+                // a + b·h² for the quarter, from its two splats (b: the part that grows with the
+                // kernel's area), then for all the indirect photons.
+                const double b = std::max(0.0, seconds[0] - seconds[1]) * 4.0 / 3.0, a = std::max(0.0, seconds[0] - b);
+                plan.splatFixed = a * KernelScaleProbe::kShare;
+                plan.splatScaled = b * KernelScaleProbe::kShare;
+                plan.passesPerRound = c_.ranks.size();
+            }
+            scale = chooseKernelScale(probe, plan);
+            if (plan.timed) nextSeconds_ = passSeconds(plan, float(scale));
+            c_.stats.setCount("kernel_probe_gain", expectedKernelError(probe, plan, 1.f) / expectedKernelError(probe, plan, float(scale)));
+            c_.stats.setCount("kernel_probe_noise", probe.noise);
+            c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
+            c_.stats.setCount("kernel_probe_bias", probe.bias());
+        }
+        c_.ranks.broadcast(&scale, 1);
+        const float m = float(scale);
+        std::vector<int64_t>& light = sum.buffers[kIndirect];
+        const std::vector<int64_t>& kept = mine[m < std::sqrt(0.5f) ? 1 : 0];
+        for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
+        splatInto(measured(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps)),
+                  part, &totals.splat);
+        sum.add(part);
+        return m;
+    }
+    // With a time limit, at rank 0: the seconds a later pass is expected to take.
+    double nextSeconds() const { return nextSeconds_; }
+
+private:
+    // Photons [first, last) of `photons`, in path order.
+    static PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
+        PhotonMap out = photons;
+        out.rays.assign(photons.rays.begin() + first, photons.rays.begin() + last);
+        return out;
+    }
+    PhotonMap measured(PhotonMap photons) const {
+        if (coverage_.probes > 0 && c_.cfg.visibilityByRays())
+            normalizeKernelCoverage(c_.accel, photons, coverage_, c_.pool, c_.reporter);
+        return photons;
+    }
+    void splatInto(const PhotonMap& photons, FixedFilm& part, SplatStats* stats) const {
+        for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
+        splatPhotons(c_.accel, tree_, eye_.samples, photons, splat_, part, c_.pool, c_.reporter, stats);
+    }
+
+    const RenderContext& c_;
+    const OcclusionTree& tree_;
+    const EyePass& eye_;
+    const SplatSettings& splat_;
+    const CoverageSettings coverage_;
+    const size_t values_;
+    double nextSeconds_ = 0.0;
+};
+
 Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     Stats& stats = c.stats;
     // The occlusion grid, once (docs/design.md §5–6), where the mask needs it or its file was asked
@@ -239,11 +343,16 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     const bool coverage = c.cfg.visibilityByRays() && cs.probes > 0;
     SplatSettings splat = splatSettings(c.cfg);
     SplatTotals totals;
+    // The indirect kernels' scale: given, or measured by the first pass (kernel_scale.h).
+    const bool probing = c.cfg.probesKernelScale();
+    double nextPass = 0.0;  // the probe's estimate of a later pass's seconds
+    ps.classScale[kPhotonIndirect] = probing ? 1.f : c.cfg.kernelScaleOrOne();
+    Timer whole;
 
     // Every pass: new eye samples (the next S of each pixel's sequence), the tree over them,
     // new photons (a fresh range of paths) with shrunk kernels, splatted (docs/design.md §4, §7–9).
-    return renderPasses(c, [&](const PassShare& share, FixedFilm& sum) {
-        const int pass = c.cfg.replays() ? c.cfg.replayPass : share.pass;
+    // A replay renders its pass alone, after the first pass's probe where the scale needs it.
+    auto renderPass = [&](int pass, const PassShare& share, FixedFilm& sum, bool replay) {
         Timer t;
         es.firstSample = pass * es.spp;
         es.firstDirectSample = pass * es.directSpp;
@@ -266,7 +375,16 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         ps.radiusScale = passRadiusScale(pass, c.cfg.alpha);
         PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, ps, c.pool, c.reporter);
         stats.addTime("photons", t.seconds());
-        const PhotonRay traced = c.cfg.replays() ? replayedRay(c, photons) : PhotonRay{};
+        // The probe's pass splats its indirect photons apart, at the scales it measures.
+        const bool probe = probing && pass == 0 && !replay;
+        PhotonMap indirect;
+        if (probe) {
+            auto begin = std::stable_partition(photons.rays.begin(), photons.rays.end(),
+                                               [](const PhotonRay& r) { return r.cls != kPhotonIndirect; });
+            indirect.rays.assign(begin, photons.rays.end());
+            photons.rays.erase(begin, photons.rays.end());
+        }
+        const PhotonRay traced = replay ? replayedRay(c, photons) : PhotonRay{};
         // The kernels' coverage, measured as the receiver rules will see it (docs/design.md §8).
         if (coverage) {
             t = Timer();
@@ -276,10 +394,10 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
             totals.coverage.report(stats);
         }
         photons.report(stats);
-        totals.photonsStored += int64_t(photons.rays.size());
+        totals.photonsStored += int64_t(photons.rays.size() + indirect.rays.size());
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
-        if (c.cfg.replays()) {  // that ray alone, after its coverage, and no light of the eye pass's
+        if (replay) {  // that ray alone, after its coverage, and no light of the eye pass's
             const PhotonRay ray = photons.rays[size_t(c.cfg.replayIndex)];
             photons.rays.assign(1, ray);
             reportReplayed(c, traced, ray, grid.geometry.voxelSize);
@@ -287,19 +405,41 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         // The eye pass's own light (emission, albedo, normal, sampled direct light), then the
         // photons' (this rank's share of them).
         t = Timer();
-        if (share.share == 0 && !c.cfg.replays()) sum.add(eye.film);
+        if (share.share == 0 && !replay) sum.add(eye.film);
         splat.share = share.share;
         splat.shares = share.shares;
         splatPhotons(c.accel, tree, eye.samples, photons, splat, sum, c.pool, c.reporter, &totals.splat);
+        const double other = whole.seconds();
+        if (probe) {
+            cs.pass = uint64_t(pass);
+            KernelScaleProbeStep step(c, tree, eye, splat, cs);
+            const float m = step.run(indirect, ps, sum, totals, whole, other);
+            nextPass = step.nextSeconds();
+            ps.classScale[kPhotonIndirect] = m;
+            char line[160];
+            std::snprintf(line, sizeof line, "indirect kernels at scale %.3g, from the bias and noise the first pass measured", m);
+            c.reporter.info(line);
+        }
         stats.addTime("splat", t.seconds());
         stats.setCount("photon_mb", totals.photonMb);
         stats.setCount("photons_stored", double(totals.photonsStored));
         stats.setCount("radius_scale", ps.radiusScale);
+        stats.setCount("kernel_scale", ps.classScale[kPhotonIndirect]);
         totals.splat.report(stats);
-        if (c.cfg.replays())
-            c.reporter.info("photon ray " + std::to_string(c.cfg.replayIndex) + " reached " +
-                            std::to_string(int64_t(stats.count("splat_contributions"))) + " eye samples");
-    });
+    };
+    const bool replay = c.cfg.replays();
+    if (replay && probing && c.cfg.replayPass > 0) {
+        FixedFilm unused(c.width, c.height);
+        renderPass(0, PassShare{0, 0, 1}, unused, false);
+        totals = SplatTotals();
+    }
+    Film film = renderPasses(
+        c, [&](const PassShare& share, FixedFilm& sum) { renderPass(replay ? c.cfg.replayPass : share.pass, share, sum, replay); },
+        probing, &nextPass);
+    if (replay)
+        c.reporter.info("photon ray " + std::to_string(c.cfg.replayIndex) + " reached " +
+                        std::to_string(int64_t(stats.count("splat_contributions"))) + " eye samples");
+    return film;
 }
 
 }  // namespace

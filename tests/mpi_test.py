@@ -60,12 +60,18 @@ def same_image(ranks, scene, *args):
 
 
 def test_time_limit_ranks_agree_on_the_passes():
+    """With a given kernel scale the passes go in whole rounds; with the scale measured (the
+    default), the first pass is every rank's, then whole rounds follow."""
+    fixed = ("--kernel-scale", "1")
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
-        many, counts = render(out, "many", 2, cli.CORNELL, "--time-limit", "2")
+        many, counts = render(out, "many", 2, cli.CORNELL, "--time-limit", "2", *fixed)
         passes = int(counts["passes"])
         cli.check(passes >= 2 and passes % 2 == 0, "2 ranks rendered %d passes: whole rounds of 2 expected" % passes)
-        one, _ = render(out, "one", 0, cli.CORNELL, "--passes", str(passes))
+        one, _ = render(out, "one", 0, cli.CORNELL, "--passes", str(passes), *fixed)
+        _, measured = render(out, "measured", 2, cli.CORNELL, "--time-limit", "2")
     cli.check(many == one, "the time-limited image differs from %d passes in one process" % passes)
+    shared = int(measured["passes"])
+    cli.check(shared % 2 == 1, "2 ranks measuring the kernel scale rendered %d passes: 1 + whole rounds of 2 expected" % shared)
 
 
 def test_a_failing_rank_ends_all_with_one_message():

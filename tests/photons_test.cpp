@@ -1,13 +1,16 @@
 // The photon tracer: energy bookkeeping in a closed room, quotas, determinism, radii, and the
-// stratification of its quasi-random sequence.
+// stratification of its quasi-random sequence; the indirect kernels' scale and its choice.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <random>
 
 #include "scene/accel.h"
 #include "scene/lights.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "splat/kernel_scale.h"
 #include "splat/photons.h"
 #include "core/qmc.h"
 #include "test_scenes.h"
@@ -110,4 +113,95 @@ TEST(PhotonTracer, ThreadCountDoesNotChangePhotons) {
     PhotonMap b = tracePhotons(s, accel, lights, st, two, silentReporter());
     ASSERT_EQ(a.rays.size(), b.rays.size());
     EXPECT_EQ(0, std::memcmp(a.rays.data(), b.rays.data(), a.rays.size() * sizeof(PhotonRay)));
+}
+
+// The probe's photons at another scale are the tracer's own at that scale, radius and reach
+// (the reach to the bounds counted again in the smaller radii) to the bit.
+TEST(KernelScale, ScaledKernelsAreTheTracersAtThatScale) {
+    Scene s = closedRoom(0.6f, true);
+    RayAccel accel(s, 2);
+    LightSampler lights(s);
+    ThreadPool pool(2);
+    PhotonSettings st;
+    st.photons = 5000;
+    st.voxelSize = 0.02f;
+    st.reachToBounds = true;
+    const PhotonMap whole = tracePhotons(s, accel, lights, st, pool, silentReporter());
+    st.classScale[kPhotonIndirect] = 0.5f;
+    const PhotonMap half = tracePhotons(s, accel, lights, st, pool, silentReporter());
+    const PhotonMap scaled = scaledKernels(s, whole, kPhotonIndirect, 0.5f, st);
+    std::vector<PhotonRay> expected;
+    for (const PhotonRay& r : half.rays)
+        if (r.cls == kPhotonIndirect) expected.push_back(r);
+    ASSERT_GT(expected.size(), 1000u);
+    ASSERT_EQ(expected.size(), scaled.rays.size());
+    EXPECT_EQ(0, std::memcmp(expected.data(), scaled.rays.data(), expected.size() * sizeof(PhotonRay)));
+    EXPECT_EQ(scaled.pathsFor[kPhotonIndirect], whole.pathsFor[kPhotonIndirect]);
+}
+
+// Four halves made from a known bias and noise: the probe finds them. Pixel i has light T,
+// whose kernels at scale 1 add a bias b = 0.2·T (¼ of it at ½), and each half (an estimate
+// of the pass from one eighth of its photons) noise of standard deviation σ at scale 1, 2σ at ½.
+TEST(KernelScale, ProbeMeasuresBiasAndNoise) {
+    const int n = 200000;
+    const double sigma = 0.05, fixed = 4294967296.0, k = KernelScaleProbe::kShare;
+    std::mt19937 rng(7);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_real_distribution<double> u(0.2, 2.0);
+    std::vector<int64_t> a(n), b(n), c(n), d(n);
+    std::vector<float> light(n);
+    double bias = 0.0, noise = 0.0;
+    for (int i = 0; i < n; ++i) {
+        const double t = u(rng), b1 = 0.2 * t, w = 1.0 / (t * t + 0.01);
+        light[i] = float(t);
+        // Each half is a quarter's half as splatted: its estimate of the pass over kShare, halved.
+        auto half = [&](double bias, double sd) { return int64_t(std::llround((t + bias + sd * g(rng)) / 2 / k * fixed)); };
+        a[i] = half(b1, sigma), b[i] = half(b1, sigma);
+        c[i] = half(b1 / 4, 2 * sigma), d[i] = half(b1 / 4, 2 * sigma);
+        bias += w * b1 * b1;
+        noise += w * 2 * (sigma / 2) * (sigma / 2) / k;  // (A + B)'s variance, for the whole pass's photons
+    }
+    const KernelScaleProbe p = probeKernelScale(a.data(), b.data(), c.data(), d.data(), light, fixed);
+    EXPECT_NEAR(p.bias() / bias, 1.0, 0.03);
+    EXPECT_NEAR(p.noise / noise, 1.0, 0.02);
+    EXPECT_NEAR(p.finerNoise / (4 * noise), 1.0, 0.02);
+}
+
+// The choice against the analytic optimum: one pass, E(m) = β m⁴ + V m⁻², least at
+// m = (V / 2β)^(1/6).
+TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
+    KernelScalePlan one;
+    one.passes = 1;
+    KernelScaleProbe p;
+    p.biasChange = 9.0 / 16.0;  // β = 1
+    p.noise = 2.0 * std::pow(0.5, 6.0);
+    p.finerNoise = 4.0 * p.noise;  // q = 2
+    EXPECT_NEAR(chooseKernelScale(p, one), 0.5f, 0.5f * 0.036f);
+    EXPECT_NEAR(expectedKernelError(p, one, 0.5f), 1.0 / 16 + 0.125, 1e-9);
+    p.noise = 2.0 * std::pow(0.7, 6.0);  // optimum 0.7: E(1)/E(0.7) = 1.7
+    p.finerNoise = 4.0 * p.noise;
+    EXPECT_NEAR(chooseKernelScale(p, one), 0.7f, 0.7f * 0.036f);
+    // More passes average the noise away and leave the bias: smaller kernels.
+    KernelScalePlan eight = one;
+    eight.passes = 8;
+    EXPECT_LT(chooseKernelScale(p, eight), 0.6f);
+    // Under a time limit, a cheaper splat buys more passes: smaller kernels still.
+    KernelScalePlan timed = one;
+    timed.timed = true;
+    timed.secondsLeft = 7.0, timed.passOther = 0.2, timed.splatScaled = 0.8;
+    EXPECT_LT(chooseKernelScale(p, timed), chooseKernelScale(p, eight));
+}
+
+// No bias measured, or too little to pay (E(1) < 1.25 E(m)): the kernels stay as they are.
+TEST(KernelScale, KeepsScaleOneWithoutAClearGain) {
+    KernelScalePlan plan;
+    plan.passes = 8;
+    KernelScaleProbe p;
+    p.noise = 1.0;
+    p.finerNoise = 4.0;
+    p.biasChange = -0.5;  // the bias estimate's noise
+    EXPECT_EQ(chooseKernelScale(p, plan), 1.f);
+    p.biasChange = 0.01;
+    EXPECT_EQ(chooseKernelScale(p, plan), 1.f);
+    EXPECT_LT(expectedKernelError(p, plan, 1.f), kMinKernelGain * expectedKernelError(p, plan, 0.9f));
 }

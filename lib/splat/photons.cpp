@@ -46,6 +46,11 @@ float exitDistance(const Bounds3& b, const Vec3& o, const Vec3& d) {
     return std::max(t, 0.f);
 }
 
+// With reachToBounds: the kernel reaches on to a radius past the scene's bounds.
+void reachBounds(const Scene& scene, PhotonRay& r) {
+    if (r.radius > 0.f) r.reach = std::max(r.reach, (exitDistance(scene.bounds, r.origin, r.dir) - r.length) / r.radius + 1.f);
+}
+
 constexpr int64_t kBlockPaths = 8192;  // paths per merge block (fixed: determinism)
 constexpr int64_t kProbePaths = 32768;  // the first block, whose yield sets the quotas
 constexpr int kDimsPerBounce = 4;      // lobe, direction (2), Russian roulette
@@ -233,11 +238,28 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
         double n = double(map.pathsFor[r.cls]);
         r.flux = Vec3(DVec3(r.flux) / n);
         float h = std::sqrt(st.k[r.cls] / (kPi * float(n) * std::max(r.density, 1e-30f)));
-        r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize) * st.radiusScale;
-        if (st.reachToBounds && r.radius > 0.f)
-            r.reach = std::max(r.reach, (exitDistance(scene.bounds, r.origin, r.dir) - r.length) / r.radius + 1.f);  // a radius past the walls on the bounds
+        r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize) * st.radiusScale *
+                   st.classScale[r.cls];
+        if (st.reachToBounds) reachBounds(scene, r);
     }
     return map;
+}
+
+PhotonMap scaledKernels(const Scene& scene, const PhotonMap& photons, int cls, float factor, const PhotonSettings& st) {
+    PhotonMap out;
+    out.pathsFor[cls] = photons.pathsFor[cls];
+    out.pathsTraced = photons.pathsTraced;
+    for (const PhotonRay& r : photons.rays) {
+        if (r.cls != cls) continue;
+        PhotonRay s = r;
+        s.radius *= factor;
+        // The reach past x(i), tan θ radii, does not depend on the radius; to the bounds it is
+        // counted again in the new radii (with factor < 1, more of them than before).
+        if (st.reachToBounds) reachBounds(scene, s);
+        out.rays.push_back(s);
+        out.count[cls]++;
+    }
+    return out;
 }
 
 }  // namespace rs

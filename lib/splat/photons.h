@@ -63,6 +63,7 @@ struct PhotonSettings {
     uint64_t firstPath = 0;                  // sequence offset (progressive passes)
     static constexpr int kPathsPerPassBits = 40;  // pass p traces paths from p · 2^40: ranges never overlap
     float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
+    ClassTriple classScale = {1.f, 1.f, 1.f}; // and per class (the indirect kernels' scale, kernel_scale.h)
     // The kernel reaches on past x(i) to the scene's bounds: with visibility by rays alone
     // (--visibility rays) a sample beyond x(i) receives only where it sees x(i−1), past the
     // edge of what the photon hit, so a kernel that half-misses a convex edge or a thin part
@@ -82,6 +83,10 @@ struct PhotonMap {
     size_t bytes() const { return rays.size() * sizeof(PhotonRay); }
     void report(Stats& stats) const;  // photons_<class> and photon_paths counts
 };
+
+// The photons of class `cls` alone, their kernels scaled by `factor` < 1, as tracePhotons would
+// give them with classScale[cls] × factor (before their coverage is measured).
+PhotonMap scaledKernels(const Scene& scene, const PhotonMap& photons, int cls, float factor, const PhotonSettings& settings);
 
 PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSampler& lights,
                        const PhotonSettings& settings, ThreadPool& pool, Reporter& reporter);

@@ -1,0 +1,80 @@
+#include "splat/kernel_scale.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rs {
+
+float passRadiusScale(int p, float alpha) {
+    double r2 = 1.0;
+    for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
+    return float(std::sqrt(r2));
+}
+
+KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
+                                  const std::vector<float>& light, double fixedScale) {
+    KernelScaleProbe p;
+    for (size_t i = 0; i < light.size(); ++i) {
+        const double w = 1.0 / (double(light[i]) * light[i] + 0.01);
+        const double k = KernelScaleProbe::kShare / fixedScale;  // each half of the quarter as the whole pass
+        const double A = double(a[i]) * k, B = double(b[i]) * k, C = double(c[i]) * k, D = double(d[i]) * k;
+        p.noise += w * (A - B) * (A - B) / KernelScaleProbe::kShare;
+        p.finerNoise += w * (C - D) * (C - D) / KernelScaleProbe::kShare;
+        const double change = A + B - C - D, noise = A - C - (B - D);
+        p.biasChange += w * (change * change - noise * noise);
+    }
+    return p;
+}
+
+namespace {
+
+// q: how the noise grows as the kernels shrink, from the two scales measured; 2 for a disc
+// whose photons spread evenly, kept within [1, 3].
+double noiseExponent(const KernelScaleProbe& p) {
+    if (!(p.noise > 0.0) || !(p.finerNoise > 0.0)) return 2.0;
+    return std::clamp(std::log2(p.finerNoise / p.noise), 1.0, 3.0);
+}
+
+}  // namespace
+
+double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan& plan, float m) {
+    double passes = plan.passes;
+    if (plan.timed) {
+        // The first pass still splats three quarters of its indirect photons at m. Only whole
+        // passes are begun; the pass time is known to some ±15 %, so the passes that fit are
+        // averaged over that, lest the choice turn on whether one more just fits.
+        const double left = std::max(0.0, plan.secondsLeft - 0.75 * splatSeconds(plan, m)), pass = passSeconds(plan, m);
+        double fit = 0.0;
+        for (double f : {0.85, 1.0, 1.15}) fit += pass > 0.0 ? std::floor(left / (pass * f)) / 3.0 : 0.0;
+        passes = 1.0 + plan.passesPerRound * fit;
+    }
+    passes = std::clamp(passes, 1.0, 1e6);
+    const int whole = std::max(1, int(std::lround(passes)));
+    const double q = noiseExponent(probe), relative = double(m);
+    double r2 = 0.0, noise = 0.0;
+    for (int p = 0; p < whole; ++p) {
+        const double r = passRadiusScale(p, plan.alpha);
+        r2 += r * r;
+        noise += std::pow(r * relative, -q);
+    }
+    r2 /= whole;
+    noise /= whole;
+    return probe.bias() * std::pow(relative, 4.0) * r2 * r2 + probe.noise * noise / passes;
+}
+
+float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
+    if (!(probe.biasChange > 0.0)) return 1.f;
+    // 2^(−k/20), k = 0 … 40: ¼ to 1 in steps of 3.5 %.
+    float best = 1.f;
+    double least = expectedKernelError(probe, plan, 1.f);
+    for (int k = 1; k <= 40; ++k) {
+        const float m = float(std::exp2(-k / 20.0));
+        const double e = expectedKernelError(probe, plan, m);
+        if (e < least) least = e, best = m;
+    }
+    // The estimates come from a quarter of a pass's photons, and heavy-tailed light (glossy
+    // lobes, caustics) makes them noisy: a scale is kept only for a clear gain.
+    return expectedKernelError(probe, plan, 1.f) >= kMinKernelGain * least ? best : 1.f;
+}
+
+}  // namespace rs

@@ -1,0 +1,68 @@
+// The indirect kernels' scale, chosen from the image (docs/design.md §7). A kernel's radius
+// trades bias (light blurred over its disc, ∝ h² where the irradiance bends) against noise (∝
+// 1/h², fewer photons under it), and which wins depends on the scene: contact shadows under a
+// point light want small kernels, a room's smooth interreflection large ones. So the first
+// pass measures both on a quarter of its indirect photons: splatted at scale 1 in two halves A
+// and B (paths of the first and second half), and with kernels half as wide in halves C and D,
+// each as an estimate of the whole pass (flux × 4). Per pixel and channel, weighted as relative
+// MSE (w = 1/(μ² + 0.01)), and for the pass's photons (the quarter's noise over 4):
+//   noise of a pass at scale 1      V = Σ w (A − B)² / 4
+//   noise at scale ½                V' = Σ w (C − D)² / 4
+//   the bias's change from 1 to ½   S = Σ w ((A + B − C − D)² − (A − C − B + D)²)
+// The second square is the first's noise (the halves are independent), so S estimates
+// Σ w (b₁ − b_½)², and with bias ∝ h², b₁ − b_½ = ¾ b₁: Σ w b₁² = 16 S / 9. Over the render's P
+// passes, whose radii shrink by r_p, a scale m then gives the expected error
+//   E(m) = Σ w b₁² · m⁴ · (mean of r_p²)² + V · mean of (r_p m)^−q / P,
+// with q from V'/V (2 for a disc), and the scale kept is the m in [¼, 1] of least E, where it
+// promises a clear gain over 1. Under a time limit P is the whole passes that fit, averaged over
+// ±15 % of a pass's time, whose splat is timed by the probe's two (a part per photon and a part
+// ∝ h²).
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace rs {
+
+struct KernelScaleProbe {
+    static constexpr int kShare = 4;  // the probe's photons: one in kShare of the pass's
+    double noise = 0.0;       // V
+    double finerNoise = 0.0;  // V'
+    double biasChange = 0.0;  // S
+    double bias() const { return std::max(0.0, biasChange) * 16.0 / 9.0; }  // Σ w b₁²
+};
+
+// From the four halves' indirect light as splatted (fixed point, pixel × rgb) and the pass's light μ.
+KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
+                                  const std::vector<float>& light, double fixedScale);
+
+struct KernelScalePlan {
+    int passes = 1;            // P, with no time limit
+    float alpha = 2.f / 3.f;   // the passes' shrinkage (passRadiusScale)
+    // With a time limit: seconds left once the probe has measured, and one pass's seconds apart
+    // from its indirect photons' splat; passes a round (ranks).
+    double secondsLeft = 0.0, passOther = 0.0;
+    // The indirect photons' splat at scale m takes splatFixed + splatScaled·m² seconds.
+    double splatFixed = 0.0, splatScaled = 0.0;
+    int passesPerRound = 1;
+    bool timed = false;
+};
+
+constexpr float kMinKernelScale = 0.25f;
+// The least E(1)/E(m) for which m is kept over 1 (measured: the probe's noise asks 1.25 on the
+// glossy box, whose estimate wavers by 1.1 either way).
+constexpr double kMinKernelGain = 1.25;
+
+// The kernel scale of pass p (0-based) from the shrinkage α: r²(n+1) = r²(n)·(n + α)/(n + 1).
+float passRadiusScale(int p, float alpha);
+
+// The m of least expected error (1 when no bias is measured).
+float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan);
+// A pass's seconds at scale m, by the plan's figures (with a time limit).
+inline double splatSeconds(const KernelScalePlan& plan, float m) { return plan.splatFixed + plan.splatScaled * double(m) * m; }
+inline double passSeconds(const KernelScalePlan& plan, float m) { return plan.passOther + splatSeconds(plan, m); }
+// E(m), for the choice and its tests.
+double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan& plan, float m);
+
+}  // namespace rs
