@@ -282,7 +282,8 @@ public:
             }
             scale = chooseKernelScale(probe, plan);
             if (plan.timed) nextSeconds_ = passSeconds(plan, float(scale));
-            c_.stats.setCount("kernel_probe_gain", expectedKernelError(probe, plan, 1.f) / expectedKernelError(probe, plan, float(scale)));
+            const double least = expectedKernelError(probe, plan, float(scale));
+            c_.stats.setCount("kernel_probe_gain", least > 0.0 ? expectedKernelError(probe, plan, 1.f) / least : 1.0);
             c_.stats.setCount("kernel_probe_noise", probe.noise);
             c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
             c_.stats.setCount("kernel_probe_bias", probe.bias());
@@ -491,6 +492,8 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     result.attributes["scene"] = scene.path;
     result.attributes["version"] = versionString();
     result.attributes["simd"] = isaName(traversalIsa());
+    if (cfg.splats() && cfg.probesKernelScale() && !cfg.replays())
+        result.attributes["kernelScale"] = "auto: " + std::to_string(stats.count("kernel_scale"));
     if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(stats.count("samples_per_pixel")));
     for (const auto& [stage, s] : stats.seconds) {
         char b[32];

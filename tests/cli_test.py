@@ -484,6 +484,16 @@ def test_good_render_writes_exr_png_and_stats():
 TIMING_COUNTS = {"threads", "paths_per_second", "memory_estimate_mb"}  # depend on the machine or the threads
 
 
+def test_stats_of_a_black_render_are_json():
+    """A room no light reaches: every figure of --stats-json is a JSON number (the kernel scale's
+    probe measures zero noise and zero bias there)."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_") as out:
+        _, _, stats = render_good(os.path.join(DATA, "two_rooms_sealed.gltf"), out, "black", "--width", "24",
+                                  "--passes", "2")
+    check(stats["counts"]["kernel_scale"] == 1, "kernel_scale %r in the dark" % stats["counts"].get("kernel_scale"))
+    check(all(isinstance(v, (int, float)) for v in stats["counts"].values()), "a count that is not a number")
+
+
 def test_one_and_two_threads_give_identical_pixels():
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
         common = ("--width", "48", "--spp", "4", "--photons", "20000", "--grid", "96", "--quiet")
@@ -651,6 +661,7 @@ def main():
             test_counts_take_exponents_and_suffixes,
             test_usage_page_lists_the_options_of_help,
             test_one_and_two_threads_give_identical_pixels,
+            test_stats_of_a_black_render_are_json,
         )]
         for name, test in tests:
             try:

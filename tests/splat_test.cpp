@@ -357,11 +357,15 @@ TEST(SplatRenderer, CornellBoxCloseToPathTracer) {
 TEST(KernelScale, ChosenByTheSceneAgainstThePathTracer) {
     const char* data = std::getenv("RAYSPLAT_DATA");
     if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    auto defaults = [] {  // the default render, 96 px, 2 passes
+        RenderConfig cfg;
+        cfg.output = "unused.exr";
+        cfg.width = cfg.height = 96;
+        cfg.passes = 2;
+        return cfg;
+    };
     Scene point = loadScene(std::string(data) + "/point_shadows.gltf", silentReporter());
-    RenderConfig cfg;
-    cfg.output = "unused.exr";
-    cfg.width = cfg.height = 96;
-    cfg.passes = 2;
+    RenderConfig cfg = defaults();
     const RenderResult chosen = render(point, cfg, silentReporter());
     cfg.kernelScale = 1.f;
     const RenderResult whole = render(point, cfg, silentReporter());
@@ -378,11 +382,7 @@ TEST(KernelScale, ChosenByTheSceneAgainstThePathTracer) {
     EXPECT_LT(e, 0.8 * e1) << "scale " << m;
 
     Scene cornell = loadScene(std::string(data) + "/cornell_box.gltf", silentReporter());
-    cfg = RenderConfig();
-    cfg.output = "unused.exr";
-    cfg.width = cfg.height = 96;
-    cfg.passes = 2;
-    EXPECT_EQ(render(cornell, cfg, silentReporter()).stats.count("kernel_scale"), 1.0);
+    EXPECT_EQ(render(cornell, defaults(), silentReporter()).stats.count("kernel_scale"), 1.0);
 }
 
 TEST(SplatRenderer, ThreadCountDoesNotChangePixels) {

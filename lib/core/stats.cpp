@@ -1,5 +1,6 @@
 #include "core/stats.h"
 
+#include <cmath>
 #include <cstdio>
 
 namespace rs {
@@ -48,7 +49,10 @@ static std::string jsonObject(const std::vector<std::pair<std::string, double>>&
     std::string out = "{";
     for (size_t i = 0; i < kv.size(); ++i) {
         char b[64];
-        std::snprintf(b, sizeof b, "%.9g", kv[i].second);
+        if (std::isfinite(kv[i].second))
+            std::snprintf(b, sizeof b, "%.9g", kv[i].second);
+        else
+            std::snprintf(b, sizeof b, "null");  // JSON has no NaN or infinity
         out += (i ? ", " : "") + jsonString(kv[i].first) + ": " + b;
     }
     return out + "}";
