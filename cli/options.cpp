@@ -193,8 +193,8 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});
     cmd.add({"--photon", "PASS:INDEX",
              "replay one photon ray (debugging): the image is the splat of ray INDEX of pass PASS alone, and its record "
-             "(class, ends, flux, radius, reach, coverage, eye samples reached) is printed; with a --seed, the same ray as "
-             "in the full render",
+             "(class, ends, flux, radius, reach, coverage, eye samples reached) is printed; with the render's --seed and "
+             "--passes (which set the kernel scale), the same ray as in the full render",
              [&](const std::string& v) {
                  const size_t colon = v.find(':');
                  if (colon == std::string::npos) throw Error(ErrorKind::Config, "--photon " + v + ": not PASS:INDEX");

@@ -104,9 +104,13 @@ void RenderConfig::validate() const {
     if (!env.empty() && !isBlack(sky)) throw Error(ErrorKind::Config, "`env` and `sky` both give an environment: choose one");
     std::error_code envError;
     if (!env.empty() && !std::filesystem::is_regular_file(env, envError)) throw Error(ErrorKind::Io, env + ": no such file");
-    if (replays() && (method == Method::Path || passes > 1 || timeLimit > 0.0))
-        throw Error(ErrorKind::Config, "`photon` replays one photon ray of one pass of a splat render: not with `method` path, "
-                                       "`passes` or `time-limit`");
+    if (replays() && (method == Method::Path || timeLimit > 0.0))
+        throw Error(ErrorKind::Config, "`photon` replays one photon ray of one pass of a splat render: not with `method` path "
+                                       "or `time-limit`");
+    if (replays() && passes > 0 && replayPass >= passes)
+        throw Error(ErrorKind::Config, "`photon` " + std::to_string(replayPass) + ":" + std::to_string(replayIndex) +
+                                           ": a render of " + std::to_string(passes) + " passes has no pass " +
+                                           std::to_string(replayPass));
     if (replays()) requireRange("photon", double(replayIndex), 0, 1e12);
     if (blenderLayer.find_first_of(".\n") != std::string::npos)
         throw Error(ErrorKind::Config, "`blender-layer` '" + blenderLayer + "' names a view layer: no '.' in it");

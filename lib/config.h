@@ -128,7 +128,10 @@ struct RenderConfig {
     GridSettings gridSettings() const { return {grid, voxelizer, vdb, cacheDir}; }
 
     int samplesPerPixel() const { return spp > 0 ? spp : method == Method::Path ? PathSettings{}.spp : EyePassSettings{}.spp; }
-    int passCount() const { return replays() ? 1 : passes > 0 ? passes : method == Method::Path ? 1 : 8; }
+    int passCount() const { return replays() ? 1 : renderPassCount(); }
+    // The passes of the render, a replayed one's too (its first pass chooses the kernel scale
+    // for this many).
+    int renderPassCount() const { return passes > 0 ? passes : method == Method::Path ? 1 : 8; }
     // The most passes whose camera sample indices (pass × samples a pixel and pass, for the
     // receivers and the direct film) fit the 31 bits they are counted in.
     int maxPasses() const;
@@ -141,7 +144,7 @@ struct RenderConfig {
     }
     // Whether the render needs the voxel grid's occlusion (the mask), not only its geometry.
     bool probesKernelScale() const {
-        return method == Method::Splat && directBySampling() && kernelScale == 0.f && (timeLimit > 0.0 || passCount() > 1);
+        return method == Method::Splat && directBySampling() && kernelScale == 0.f && (timeLimit > 0.0 || renderPassCount() > 1);
     }
     float kernelScaleOrOne() const { return kernelScale > 0.f ? kernelScale : 1.f; }
     bool needsMask() const { return method == Method::Splat && visibilityUsed() == Visibility::Mask; }

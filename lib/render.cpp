@@ -222,6 +222,15 @@ void reportReplayed(const RenderContext& c, const PhotonRay& traced, const Photo
     c.reporter.info(buf);
 }
 
+// `photons` with their kernels' coverage measured, where the render measures it.
+PhotonMap withCoverage(const RenderContext& c, PhotonMap photons, const CoverageSettings& cs) {
+    if (cs.probes > 0 && c.cfg.visibilityByRays()) normalizeKernelCoverage(c.accel, photons, cs, c.pool, c.reporter);
+    return photons;
+}
+
+// The scale at which the first pass keeps its probed quarter's light, for the scale m chosen.
+float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
+
 // The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a quarter of
 // its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
 // each; the halves are summed at rank 0, which chooses the scale m and tells the others. The
@@ -245,7 +254,8 @@ public:
         double seconds[2];  // the quarter's splat at 1 and at ½
         for (int f = 0; f < 2; ++f) {
             Timer t;
-            const PhotonMap scaled = measured(scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps));
+            const PhotonMap scaled =
+                withCoverage(c_, scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps), coverage_);
             mine[f].assign(values_, 0);
             for (int h = 0; h < 2; ++h) {
                 splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f ? nullptr : &totals.splat);
@@ -267,7 +277,7 @@ public:
             const KernelScaleProbe probe = probeKernelScale(&halves[0], &halves[values_], &halves[2 * values_],
                                                             &halves[3 * values_], light, FixedFilm::kScale);
             KernelScalePlan plan;
-            plan.passes = c_.cfg.passCount();
+            plan.passes = c_.cfg.renderPassCount();
             plan.alpha = c_.cfg.alpha;
             if (c_.cfg.timeLimit > 0.0) {  // the user asked for time: the passes are counted by it
                 plan.timed = true;
@@ -291,9 +301,10 @@ public:
         c_.ranks.broadcast(&scale, 1);
         const float m = float(scale);
         std::vector<int64_t>& light = sum.buffers[kIndirect];
-        const std::vector<int64_t>& kept = mine[m < std::sqrt(0.5f) ? 1 : 0];
+        const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
         for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
-        splatInto(measured(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps)),
+        splatInto(withCoverage(c_, scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
+                               coverage_),
                   part, &totals.splat);
         sum.add(part);
         return m;
@@ -301,17 +312,37 @@ public:
     // With a time limit, at rank 0: the seconds a later pass is expected to take.
     double nextSeconds() const { return nextSeconds_; }
 
+    // Ray `index` of the first pass's photons (path order, before coverage) as that pass
+    // splatted it under the probe, the scale m chosen: in its part (the other classes, the
+    // probed quarter of the indirect ones or the rest), at that part's scale, with the coverage
+    // measured over that part.
+    static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
+                                const PhotonSettings& ps, const CoverageSettings& cs) {
+        PhotonMap part = traced;
+        part.rays.clear();
+        const bool indirect = traced.rays[index].cls == kPhotonIndirect;
+        size_t at = 0;
+        for (size_t i = 0; i < traced.rays.size(); ++i) {
+            if ((traced.rays[i].cls == kPhotonIndirect) != indirect) continue;
+            if (i == index) at = part.rays.size();
+            part.rays.push_back(traced.rays[i]);
+        }
+        if (indirect) {
+            const size_t quarter = part.rays.size() / KernelScaleProbe::kShare;
+            const bool probed = at < quarter;
+            part = scaledKernels(c.scene, probed ? slice(part, 0, quarter) : slice(part, quarter, part.rays.size()),
+                                 kPhotonIndirect, probed ? keptProbeScale(m) : m, ps);
+            at -= probed ? 0 : quarter;
+        }
+        return withCoverage(c, part, cs).rays[at];
+    }
+
 private:
     // Photons [first, last) of `photons`, in path order.
     static PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
         PhotonMap out = photons;
         out.rays.assign(photons.rays.begin() + first, photons.rays.begin() + last);
         return out;
-    }
-    PhotonMap measured(PhotonMap photons) const {
-        if (coverage_.probes > 0 && c_.cfg.visibilityByRays())
-            normalizeKernelCoverage(c_.accel, photons, coverage_, c_.pool, c_.reporter);
-        return photons;
     }
     void splatInto(const PhotonMap& photons, FixedFilm& part, SplatStats* stats) const {
         for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
@@ -374,7 +405,10 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         t = Timer();
         ps.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
         ps.radiusScale = passRadiusScale(pass, c.cfg.alpha);
-        PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, ps, c.pool, c.reporter);
+        PhotonSettings passPs = ps;  // the probe's pass traces at scale 1 and scales its parts itself
+        if (probing && pass == 0) passPs.classScale[kPhotonIndirect] = 1.f;
+        PhotonMap photons = tracePhotons(c.scene, c.accel, c.lights, passPs, c.pool, c.reporter);
+        const PhotonMap probeTraced = replay && probing && pass == 0 ? photons : PhotonMap();
         stats.addTime("photons", t.seconds());
         // The probe's pass splats its indirect photons apart, at the scales it measures.
         const bool probe = probing && pass == 0 && !replay;
@@ -399,7 +433,10 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
         if (replay) {  // that ray alone, after its coverage, and no light of the eye pass's
-            const PhotonRay ray = photons.rays[size_t(c.cfg.replayIndex)];
+            const PhotonRay ray = probeTraced.rays.empty()
+                                      ? photons.rays[size_t(c.cfg.replayIndex)]
+                                      : KernelScaleProbeStep::asSplatted(c, probeTraced, size_t(c.cfg.replayIndex),
+                                                                         ps.classScale[kPhotonIndirect], passPs, cs);
             photons.rays.assign(1, ray);
             reportReplayed(c, traced, ray, grid.geometry.voxelSize);
         }
@@ -414,7 +451,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         if (probe) {
             cs.pass = uint64_t(pass);
             KernelScaleProbeStep step(c, tree, eye, splat, cs);
-            const float m = step.run(indirect, ps, sum, totals, whole, other);
+            const float m = step.run(indirect, passPs, sum, totals, whole, other);
             nextPass = step.nextSeconds();
             ps.classScale[kPhotonIndirect] = m;
             char line[160];
@@ -429,7 +466,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         totals.splat.report(stats);
     };
     const bool replay = c.cfg.replays();
-    if (replay && probing && c.cfg.replayPass > 0) {
+    if (replay && probing) {  // the scale, as the render's first pass chooses it
         FixedFilm unused(c.width, c.height);
         renderPass(0, PassShare{0, 0, 1}, unused, false);
         totals = SplatTotals();

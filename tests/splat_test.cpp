@@ -411,8 +411,7 @@ TEST(SplatRenderer, ReplayedPhotonsAddUpToTheirPass) {
     const RenderResult full = render(scene, cfg, silentReporter());
     std::vector<Vec3> sum(full.film.layers[kIndirect].size(), Vec3(0.f));
     std::vector<Vec3> caustic = sum;
-    cfg.passes = 0;
-    cfg.replayPass = 0;
+    cfg.replayPass = 0;  // of the render of one pass
     for (int i = 0; i < 40; ++i) {
         cfg.replayIndex = i;
         const RenderResult one = render(scene, cfg, silentReporter());
@@ -433,4 +432,35 @@ TEST(SplatRenderer, ReplayedPhotonsAddUpToTheirPass) {
     EXPECT_GT(light, 0.0) << "not vacuous";
     cfg.replayIndex = 40;
     EXPECT_THROW(render(scene, cfg, silentReporter()), Error) << "past the pass's rays";
+}
+
+// The same over two passes, whose first measures the kernel scale (splat/kernel_scale.h) and
+// splats its indirect photons in parts, each with its own scale and coverage: the replays of
+// both passes add up to twice the render's photon light.
+TEST(SplatRenderer, ReplayedPhotonsAddUpUnderTheKernelScaleProbe) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
+    RenderConfig cfg = splatConfig(24);
+    cfg.height = 0;
+    cfg.photons = 24;
+    cfg.passes = 2;
+    const RenderResult full = render(scene, cfg, silentReporter());
+    std::vector<Vec3> sum(full.film.layers[kIndirect].size(), Vec3(0.f));
+    for (int pass = 0; pass < 2; ++pass) {
+        cfg.replayPass = pass;
+        for (int i = 0; i < 24; ++i) {
+            cfg.replayIndex = i;
+            const RenderResult one = render(scene, cfg, silentReporter());
+            for (size_t p = 0; p < sum.size(); ++p) sum[p] += one.film.layers[kIndirect][p] + one.film.layers[kCaustic][p];
+        }
+    }
+    double light = 0.0;
+    for (size_t p = 0; p < sum.size(); ++p) {
+        const Vec3 whole = 2.f * (full.film.layers[kIndirect][p] + full.film.layers[kCaustic][p]);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[p][c], whole[c], 1e-5f * (1.f + whole[c]));
+        light += sum[p].x;
+    }
+    EXPECT_GT(light, 0.0) << "not vacuous";
+    EXPECT_GT(full.stats.count("kernel_probe_noise"), 0.0) << "the probe ran";
 }
