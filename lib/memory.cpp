@@ -24,6 +24,10 @@ constexpr double kBytesPerEyeSample = 2 * double(EyeSamples::kBytesPerSample + s
 // Per pixel: the passes' fixed-point sum (six RGB buffers of 8-byte integers: layers, albedo,
 // normal), a pass's float film, and one buffer's copy for a distributed render's reduction.
 constexpr double kFilmBytesPerPixel = 6 * 3 * 8 + 6 * 12 + 3 * 8;
+// Per pixel, in the first pass where it measures the kernel scale (render.cpp's
+// KernelScaleProbeStep): four half-images and the two kept (RGB, 8 bytes) and a splat's film
+// of three layers.
+constexpr double kProbeBytesPerPixel = (4 + 2 + 3) * 3 * 8;
 // Per pixel and thread: the splat's fixed-point accumulators (three layers × RGB × 8 bytes).
 constexpr double kSplatBytesPerPixelThread = 3 * 3 * 8;
 // Per triangle: the scene's vertex data and Embree's BVH (high quality, robust).
@@ -57,7 +61,7 @@ MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t
         const double tile = std::min(4.0 * dims[0], most) * std::min(4.0 * std::max(dims[1], dims[2]), most);
         m.grid = voxels * kSideCount + tile * 16;
     }
-    m.film = pixels * kFilmBytesPerPixel;
+    m.film = pixels * (kFilmBytesPerPixel + (cfg.probesKernelScale() ? kProbeBytesPerPixel : 0.0));
     m.bvh = double(triangles) * kBvhBytesPerTriangle;
     if (cfg.splats()) {
         const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);

@@ -250,7 +250,9 @@ public:
         const size_t quarter = indirect.rays.size() / KernelScaleProbe::kShare;
         std::vector<int64_t> halves(4 * values_);  // A, B, C, D: the indirect layer of each
         std::vector<int64_t> mine[2];              // this rank's light of the quarter at 1 and at ½
-        FixedFilm part(c_.width, c_.height);
+        FixedFilm part;  // the splat's layers only
+        part.width = c_.width, part.height = c_.height;
+        for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
         double seconds[2];  // the quarter's splat at 1 and at ½
         for (int f = 0; f < 2; ++f) {
             Timer t;
@@ -306,7 +308,8 @@ public:
         splatInto(withCoverage(c_, scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
                                coverage_),
                   part, &totals.splat);
-        sum.add(part);
+        for (int l = 0; l < kProbeLayers; ++l)
+            for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(sum.buffers[l][i], part.buffers[l][i]);
         return m;
     }
     // With a time limit, at rank 0: the seconds a later pass is expected to take.
@@ -338,6 +341,8 @@ public:
     }
 
 private:
+    static constexpr int kProbeLayers = kCaustic + 1;  // the layers a splat writes: direct, indirect, caustic
+
     // Photons [first, last) of `photons`, in path order.
     static PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
         PhotonMap out = photons;
