@@ -398,69 +398,49 @@ TEST(SplatRenderer, ThreadCountDoesNotChangePixels) {
 }
 
 // --photon replays one photon ray: the same ray as in the full render (the same path, radius,
-// coverage and receivers), so the replays of every ray of a pass add up to that pass's photon
-// light. On the glossy box (indirect and caustic rays, glass) with 40 photons in one pass.
-TEST(SplatRenderer, ReplayedPhotonsAddUpToTheirPass) {
+// coverage and receivers), so the replays of every ray of every pass add up to the passes'
+// photon light. On the glossy box (indirect and caustic rays, glass), `photons` a pass.
+void expectReplaysAddUp(int passes, int photons) {
     const char* data = std::getenv("RAYSPLAT_DATA");
     if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
     Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
     RenderConfig cfg = splatConfig(24);
     cfg.height = 0;
-    cfg.photons = 40;
-    cfg.passes = 1;
+    cfg.photons = photons;
+    cfg.passes = passes;
     const RenderResult full = render(scene, cfg, silentReporter());
+    EXPECT_EQ(full.stats.count("kernel_probe_noise") > 0.0, passes > 1) << "the scale is measured with passes to follow";
     std::vector<Vec3> sum(full.film.layers[kIndirect].size(), Vec3(0.f));
     std::vector<Vec3> caustic = sum;
-    cfg.replayPass = 0;  // of the render of one pass
-    for (int i = 0; i < 40; ++i) {
-        cfg.replayIndex = i;
-        const RenderResult one = render(scene, cfg, silentReporter());
-        for (size_t p = 0; p < sum.size(); ++p) {
-            sum[p] += one.film.layers[kIndirect][p];
-            caustic[p] += one.film.layers[kCaustic][p];
-            ASSERT_EQ(one.film.layers[kEmission][p], Vec3(0.f)) << "the eye pass's own light is left out";
+    for (int pass = 0; pass < passes; ++pass) {
+        cfg.replayPass = pass;  // of the render of `passes` passes
+        for (int i = 0; i < photons; ++i) {
+            cfg.replayIndex = i;
+            const RenderResult one = render(scene, cfg, silentReporter());
+            for (size_t p = 0; p < sum.size(); ++p) {
+                sum[p] += one.film.layers[kIndirect][p];
+                caustic[p] += one.film.layers[kCaustic][p];
+                ASSERT_EQ(one.film.layers[kEmission][p], Vec3(0.f)) << "the eye pass's own light is left out";
+            }
         }
     }
     double light = 0.0;
+    const float n = float(passes);
     for (size_t p = 0; p < sum.size(); ++p) {
         for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(sum[p][c], full.film.layers[kIndirect][p][c], 1e-5f * (1.f + full.film.layers[kIndirect][p][c]));
-            EXPECT_NEAR(caustic[p][c], full.film.layers[kCaustic][p][c], 1e-5f * (1.f + full.film.layers[kCaustic][p][c]));
+            const float indirect = n * full.film.layers[kIndirect][p][c], caustics = n * full.film.layers[kCaustic][p][c];
+            EXPECT_NEAR(sum[p][c], indirect, 1e-5f * (1.f + indirect));
+            EXPECT_NEAR(caustic[p][c], caustics, 1e-5f * (1.f + caustics));
         }
         light += sum[p].x + caustic[p].x;
     }
     EXPECT_GT(light, 0.0) << "not vacuous";
-    cfg.replayIndex = 40;
+    cfg.replayIndex = photons;
     EXPECT_THROW(render(scene, cfg, silentReporter()), Error) << "past the pass's rays";
 }
 
-// The same over two passes, whose first measures the kernel scale (splat/kernel_scale.h) and
-// splats its indirect photons in parts, each with its own scale and coverage: the replays of
-// both passes add up to twice the render's photon light.
-TEST(SplatRenderer, ReplayedPhotonsAddUpUnderTheKernelScaleProbe) {
-    const char* data = std::getenv("RAYSPLAT_DATA");
-    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
-    Scene scene = loadScene(std::string(data) + "/glossy_box.glb", silentReporter());
-    RenderConfig cfg = splatConfig(24);
-    cfg.height = 0;
-    cfg.photons = 24;
-    cfg.passes = 2;
-    const RenderResult full = render(scene, cfg, silentReporter());
-    std::vector<Vec3> sum(full.film.layers[kIndirect].size(), Vec3(0.f));
-    for (int pass = 0; pass < 2; ++pass) {
-        cfg.replayPass = pass;
-        for (int i = 0; i < 24; ++i) {
-            cfg.replayIndex = i;
-            const RenderResult one = render(scene, cfg, silentReporter());
-            for (size_t p = 0; p < sum.size(); ++p) sum[p] += one.film.layers[kIndirect][p] + one.film.layers[kCaustic][p];
-        }
-    }
-    double light = 0.0;
-    for (size_t p = 0; p < sum.size(); ++p) {
-        const Vec3 whole = 2.f * (full.film.layers[kIndirect][p] + full.film.layers[kCaustic][p]);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[p][c], whole[c], 1e-5f * (1.f + whole[c]));
-        light += sum[p].x;
-    }
-    EXPECT_GT(light, 0.0) << "not vacuous";
-    EXPECT_GT(full.stats.count("kernel_probe_noise"), 0.0) << "the probe ran";
-}
+TEST(SplatRenderer, ReplayedPhotonsAddUpToTheirPass) { expectReplaysAddUp(1, 40); }
+
+// Over two passes the first measures the kernel scale (splat/kernel_scale.h) and splats its
+// indirect photons in parts, each with its own scale and coverage: the replays follow it.
+TEST(SplatRenderer, ReplayedPhotonsAddUpUnderTheKernelScaleProbe) { expectReplaysAddUp(2, 24); }
