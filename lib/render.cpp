@@ -308,8 +308,7 @@ public:
         splatInto(withCoverage(c_, scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
                                coverage_),
                   part, &totals.splat);
-        for (int l = 0; l < kProbeLayers; ++l)
-            for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(sum.buffers[l][i], part.buffers[l][i]);
+        sum.add(part);
         return m;
     }
     // With a time limit, at rank 0: the seconds a later pass is expected to take.

@@ -57,8 +57,11 @@ void FixedFilm::add(const Film& film) {
 
 void FixedFilm::add(const FixedFilm& other) {
     RS_CHECK(other.width == width && other.height == height);
-    for (int b = 0; b < kBuffers; ++b)
+    for (int b = 0; b < kBuffers; ++b) {
+        if (other.buffers[b].empty()) continue;  // a film of some buffers only (a splat's layers)
+        RS_CHECK(other.buffers[b].size() == buffers[b].size());
         for (size_t i = 0; i < buffers[b].size(); ++i) addSaturating(buffers[b][i], other.buffers[b][i]);
+    }
 }
 
 Film FixedFilm::average(int passes) const {

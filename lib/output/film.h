@@ -45,7 +45,7 @@ struct FixedFilm {
     size_t pixelCount() const { return size_t(width) * height; }
     static int64_t toFixed(float v);
     static void addSaturating(int64_t& sum, int64_t v);
-    void add(const FixedFilm& other);
+    void add(const FixedFilm& other);  // its buffers that it holds (all, or a splat's layers)
     void add(const Film& film);  // every buffer of `film`, pixelwise
     // The average of `passes` passes, as a float film.
     Film average(int passes) const;

@@ -51,11 +51,11 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
     passes = std::clamp(passes, 1.0, 1e6);
     const int whole = std::max(1, int(std::lround(passes)));
     const double q = noiseExponent(probe), relative = double(m);
-    double r2 = 0.0, noise = 0.0;
+    double r2 = 0.0, noise = 0.0, pass2 = 1.0;  // pass p's r², as passRadiusScale makes it
     for (int p = 0; p < whole; ++p) {
-        const double r = passRadiusScale(p, plan.alpha);
-        r2 += r * r;
-        noise += std::pow(r * relative, -q);
+        if (p > 0) pass2 *= (p + double(plan.alpha)) / (p + 1.0);
+        r2 += pass2;
+        noise += std::pow(pass2 * relative * relative, -q / 2.0);
     }
     r2 /= whole;
     noise /= whole;
