@@ -114,6 +114,7 @@ PathSettings pathSettings(const RenderContext& c) {
 SplatSettings splatSettings(const RenderConfig& cfg) {
     SplatSettings splat;
     splat.visibility = cfg.method == Method::Splat;
+    splat.receiverWindow = cfg.visibilityByRays();
     return splat;
 }
 

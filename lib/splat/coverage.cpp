@@ -31,15 +31,15 @@ constexpr float kGoldenTurn = 0.38196601f;  // 2 − φ: successive probes a gol
 // cylinder and not only the first along each line, it counts every non-specular surface it
 // crosses whose point, lifted to the side the probe comes from, sees x(i−1) (rule 2). The
 // probes of a photon are parallel and their rule-2 rays share an end: one packet each.
-float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float turn) {
+float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float turn, bool windowed) {
     const Frame frame(ray.dir);
     const Vec3 n = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
     const float cosOrigin = glm::dot(n, ray.dir);
-    const float end = ray.length + ray.radius * ray.reach;
+    const float begin = ray.kernelBegin(windowed), end = ray.kernelEnd(windowed);
     const float offset = 2.f * rayOriginOffset(ray.origin);
     const Scene& scene = accel.scene();
     Vec3 from[RayAccel::kPacket], lifted[RayAccel::kPacket];
-    float left[RayAccel::kPacket], t[RayAccel::kPacket];
+    float left[RayAccel::kPacket], t[RayAccel::kPacket], depth[RayAccel::kPacket];
     uint32_t tri[RayAccel::kPacket];
     int live = 0;
     for (int k = 0; k < probes; ++k) {
@@ -50,6 +50,7 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
         start += offset / std::max(cosOrigin, 0.05f);
         if (!(start < end)) continue;
         from[live] = ray.origin + u + start * ray.dir;
+        depth[live] = start;
         left[live++] = end - start;
     }
     int covered = 0;
@@ -62,8 +63,9 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
             const Vec3 ng = scene.geometricNormal(tri[i]);
             const float eps = rayOriginOffset(p);
             const Vec3 toward = glm::dot(ray.dir, ng) < 0.f ? ng : -ng;  // the side the probe comes from
-            if (!scene.materials[scene.triMaterial[tri[i]]].isSpecular()) lifted[receivers++] = p + eps * toward;
-            if (left[i] - t[i] > 0.f) from[next] = p - eps * toward, left[next++] = left[i] - t[i];
+            const float at = depth[i] + t[i];
+            if (at > begin && !scene.materials[scene.triMaterial[tri[i]]].isSpecular()) lifted[receivers++] = p + eps * toward;
+            if (left[i] - t[i] > 0.f) from[next] = p - eps * toward, depth[next] = at, left[next++] = left[i] - t[i];
         }
         if (receivers > 0) covered += receivers - __builtin_popcount(accel.occludedToPoint(lifted, receivers, ray.origin));
         live = next;
@@ -85,12 +87,12 @@ void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const Co
             PhotonRay& ray = photons.rays[size_t(i)];
             const uint64_t key = hashKey(settings.seed, Stage::Coverage, settings.pass << PhotonSettings::kPathsPerPassBits | uint64_t(i));
             const float turn = toUnitFloat(uint32_t(key));
-            float c = coverageOf(accel, ray, settings.probes, turn);
+            float c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
             if (c < CoverageSettings::kShrinkBelow) {
                 // The same absolute reach past x(i): it is the scene's bounds or h·tan θ at the hit.
                 ray.radius *= 0.5f;
                 ray.reach *= 2.f;
-                c = coverageOf(accel, ray, settings.probes, turn);
+                c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
                 ++st.shrunk;
             }
             ++st.photons;

@@ -46,6 +46,9 @@ struct CoverageSettings {
     // and glossy_box unchanged, point_shadows 0.999 → 0.998 (0.5: 0.998, 0.996, 0.998, 0.999,
     // 0.990). Rel. MSE on those scenes changed by under 0.5 %.
     float minCoverage = 0.25f;
+    // Counts only the surfaces within PhotonRay::kReceiverWindow radii of x(i), as the splat
+    // takes them (SplatSettings::receiverWindow).
+    bool receiverWindow = true;
     uint64_t seed = 0;       // with the pass: the probes' rotation, a function of (seed, pass, photon)
     uint64_t pass = 0;
 };

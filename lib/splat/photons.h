@@ -5,6 +5,7 @@
 // a splat radius from the path pdf. World space, metres; flux in W.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -39,6 +40,17 @@ struct PhotonRay {
     // A segment meeting a flat receiver at angle θ from its normal puts the parallel rays of
     // its kernel disc down up to h·tan θ past x(i): the cylinder must reach that far.
     static float reachOf(float cosTheta);
+
+    // Where along the ray, from x(i−1), surfaces take the kernel's light: up to one reach past
+    // x(i), and, `windowed`, only within kReceiverWindow radii of x(i) (docs/design.md §8). A
+    // surface the photon passed long before its end, or one far behind it, is not where its
+    // neighbours in the kernel went: through a blind's slats, photons bound for the ceiling put
+    // their light on the slats' undersides. Coverage and splat keep the same window.
+    static constexpr float kReceiverWindow = 8.f;
+    float kernelBegin(bool windowed) const { return windowed ? std::max(0.f, length - kReceiverWindow * radius) : 0.f; }
+    float kernelEnd(bool windowed) const {
+        return length + radius * (windowed ? std::min(reach, kReceiverWindow) : reach);
+    }
 };
 
 // One number per photon class: direct, indirect, caustic.

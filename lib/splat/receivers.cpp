@@ -14,10 +14,10 @@
 
 namespace rs {
 
-SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes)
+SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes, bool windowed)
     : accel_(accel), origin_(ray.origin),
       originNormal_(ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f)), hasOriginNormal_(ray.originNormal != 0) {
-    if (withPlanes) findBlockers(ray);
+    if (withPlanes) findBlockers(ray, windowed);
 }
 
 // The triangles near the cylinder: their planes oriented to x(i−1), and the planes through
@@ -27,9 +27,9 @@ SegmentReceivers::SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, 
 // sample on its surface's front. An edge plane is made in double precision; one whose edge
 // points at x(i−1) (no plane) is never passed, so its triangle then blocks whatever is behind
 // its plane.
-void SegmentReceivers::findBlockers(const PhotonRay& ray) {
+void SegmentReceivers::findBlockers(const PhotonRay& ray, bool windowed) {
     const float o = std::max(std::abs(origin_.x), std::max(std::abs(origin_.y), std::abs(origin_.z)));
-    const float length = ray.length + ray.radius * ray.reach;
+    const float length = ray.kernelEnd(windowed);
     const float reach = o + length + ray.radius;
     const float widen = 2.f * rayOriginOffset(Vec3(reach));
     const Scene& scene = accel_.scene();

@@ -146,12 +146,12 @@ namespace {
 
 // One photon ray's cylinder (voxel space): it reaches past the hit as far as the kernel lands;
 // with visibility it leaves out the samples behind the origin's tangent plane (rule 1).
-Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility) {
+Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility, bool windowed) {
     Cylinder cyl;
     cyl.origin = g.voxelFromWorld(ray.origin);
     cyl.dir = ray.dir;
     cyl.radius = ray.radius / g.voxelSize;
-    cyl.length = (ray.length + ray.radius * ray.reach) / g.voxelSize;
+    cyl.length = ray.kernelEnd(windowed) / g.voxelSize;
     cyl.originNormal = ray.originNormal && visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
     return cyl;
 }
@@ -173,15 +173,17 @@ class PhotonSplat {
 public:
     PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, const SplatSettings& settings,
                 int64_t* layer, SplatStats& stats)
-        : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), end_(ray.length + ray.radius * ray.reach),
+        : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), begin_(ray.kernelBegin(settings.receiverWindow)),
+          end_(ray.kernelEnd(settings.receiverWindow)),
           kernelScale_(3.f / (kPi * h2_)), visibility_(settings.visibility), batches_(settings.batches), layer_(layer),
-          stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes), pending_(receivers_, stats) {
+          stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes, settings.receiverWindow),
+          pending_(receivers_, stats) {
 #if defined(__SSE2__)
         for (int a = 0; a < 3; ++a) {
             four_.origin[a] = _mm_set1_ps(ray.origin[a]), four_.dir[a] = _mm_set1_ps(ray.dir[a]);
             four_.flux[a] = _mm_set1_ps(ray.flux[a]), four_.originNormal[a] = _mm_set1_ps(receivers_.originNormal()[a]);
         }
-        four_.end = _mm_set1_ps(end_), four_.h2 = _mm_set1_ps(h2_), four_.kernelScale = _mm_set1_ps(kernelScale_);
+        four_.begin = _mm_set1_ps(begin_), four_.end = _mm_set1_ps(end_), four_.h2 = _mm_set1_ps(h2_), four_.kernelScale = _mm_set1_ps(kernelScale_);
 #endif
     }
 
@@ -205,7 +207,7 @@ public:
         const Vec3 y = samples_.position[i];
         const Vec3 oy = y - ray_.origin;
         const float t = glm::dot(oy, w);
-        if (t <= 0.f || t > end_) return;
+        if (t <= begin_ || t > end_) return;
         const float d2 = glm::dot(oy, oy) - t * t;
         if (d2 >= h2_) return;
         const Vec3 n = units_[samples_.normal[i]];
@@ -286,7 +288,7 @@ private:
     const EyeSamples& samples_;
     const Vec3* const units_ = unitTable();
     const PhotonRay& ray_;
-    const float h2_, end_, kernelScale_;
+    const float h2_, begin_, end_, kernelScale_;  // begin_, end_: the depths that receive
     const bool visibility_, batches_;
     int64_t* layer_;
     SplatStats& stats_;
@@ -294,7 +296,7 @@ private:
     PendingContributions pending_;
 #if defined(__SSE2__)
     struct FourLanes {  // the ray's numbers for receive4, each in all four lanes, set once a photon
-        __m128 origin[3], dir[3], flux[3], originNormal[3], end, h2, kernelScale;
+        __m128 origin[3], dir[3], flux[3], originNormal[3], begin, end, h2, kernelScale;
     } four_;
 #endif
 };
@@ -316,7 +318,7 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
     const __m128 zero = _mm_setzero_ps();
     // Inside the kernel, facing the photon (negated rejections: a NaN is rejected).
     const __m128 t = oy.dot(four_.dir);
-    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, zero), _mm_cmpngt_ps(t, four_.end));
+    __m128 ok = _mm_and_ps(_mm_cmpnle_ps(t, four_.begin), _mm_cmpngt_ps(t, four_.end));
     const __m128 d2 = _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(oy.x, oy.x), _mm_mul_ps(oy.y, oy.y)), _mm_mul_ps(oy.z, oy.z)),
                                  _mm_mul_ps(t, t));
     ok = _mm_and_ps(ok, _mm_cmpnge_ps(d2, four_.h2));
@@ -438,7 +440,7 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
         for (int64_t p = first + b; p < first + e; ++p) {
             const PhotonRay& ray = photons.rays[order[size_t(p)]];
             PhotonSplat splat(accel, samples, ray, settings, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
-            traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility), scratch[thread],
+            traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow), scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
                                         [&](const uint32_t* index, const float* visibility, size_t count) {

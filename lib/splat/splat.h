@@ -75,7 +75,8 @@ public:
     static constexpr int kMaxPlanes = 16;
 
     // withPlanes: gather the triangles near the cylinder for surelyVisible (else it says no).
-    SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes);
+    // windowed: the ray's samples lie within its receiver window (PhotonRay::kernelEnd).
+    SegmentReceivers(const RayAccel& accel, const PhotonRay& ray, bool withPlanes, bool windowed = false);
     // Rule 1 for y.
     bool inFrontOfOrigin(const Vec3& y) const {
         return !hasOriginNormal_ || glm::dot(y - origin_, originNormal_) > 0.f;
@@ -134,7 +135,7 @@ private:
         float height;  // x(i−1)'s height over the plane, > margin
         Vec3 edge[3];  // unit normals of the planes through x(i−1) and an edge, out of the cone
     };
-    void findBlockers(const PhotonRay& ray);
+    void findBlockers(const PhotonRay& ray, bool windowed);
 #if defined(__SSE2__)
     struct WideBlocker {  // a Blocker's numbers, each in all four lanes
         __m128 n[3], d, margin, height, edge[3][3];
@@ -176,6 +177,9 @@ struct SplatSettings {
     // The samples the mask leaves wholly visible are received four at a time (SSE): the same
     // operations lane by lane, so the same film as one at a time (off), which the tests compare.
     bool batches = true;
+    // Only surfaces within PhotonRay::kReceiverWindow radii of x(i) receive (the kernel coverage
+    // counts the same): with visibility by rays, not with the paper's mask.
+    bool receiverWindow = true;
     static constexpr int64_t kChunk = 256;
 };
 
