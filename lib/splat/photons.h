@@ -76,11 +76,11 @@ struct PhotonSettings {
     static constexpr int kPathsPerPassBits = 40;  // pass p traces paths from p · 2^40: ranges never overlap
     float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
     ClassTriple classScale = {1.f, 1.f, 1.f}; // and per class (the indirect kernels' scale, kernel_scale.h)
-    // The kernel reaches on past x(i) to the scene's bounds: with visibility by rays alone
-    // (--visibility rays) a sample beyond x(i) receives only where it sees x(i−1), past the
-    // edge of what the photon hit, so a kernel that half-misses a convex edge or a thin part
-    // loses nothing there. (Cut at reachOf, the staircase interior's indirect light lost 4 %
-    // more; on the furnished interior rel. MSE was 3.3e-3 at 8 radii, 2.1e-3 to the bounds.)
+    // The kernel reaches on past x(i) to the scene's bounds (the splat and the coverage stop
+    // kReceiverWindow radii past it): with visibility by rays alone (--visibility rays) a
+    // sample beyond x(i) receives only where it sees x(i−1), past the edge of what the photon
+    // hit, so a kernel that half-misses a convex edge or a thin part loses nothing there. (Cut
+    // at reachOf, the staircase interior's indirect light lost 4 % more.)
     bool reachToBounds = false;
     int64_t maxPaths = 0;                    // 0: 50 × photons
 };
