@@ -101,16 +101,26 @@ TEST(KernelCoverage, ConcaveCornerKeepsTheKernelInFrontOfTheWall) {
     }
 }
 
-// Every surface a kernel ray crosses within the cylinder counts, as the splat takes every sample
-// in it. Straight down from (0, 1, 0) onto a floor, past a plank 2 cm thick at y = 0.5 covering
-// x > 0.02 (0.2 radii): rays at u > 0.2 cross the plank's top, then the floor, whose point at x
-// sees x(i−1) over the plank while x·0.5 < 0.02 (u < 0.4). Those rays count twice.
-TEST(KernelCoverage, CountsEverySurfaceThatSeesTheOrigin) {
+namespace {
+
+// A floor at y = 0 and, over it, a plank 2 cm thick at y = 0.5 covering x > 0.02.
+Scene floorUnderPlank() {
     Scene s;
     uint32_t white = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
     addQuad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, white);
     addBox(s, {0.02f, 0.5f, -1.f}, {1.f, 0.52f, 1.f}, white);
     s.computeBounds();
+    return s;
+}
+
+}  // namespace
+
+// Every surface a kernel ray crosses within the cylinder counts, as the splat takes every sample
+// in it. Straight down from (0, 1, 0) onto a floor, past a plank 2 cm thick at y = 0.5 covering
+// x > 0.02 (0.2 radii): rays at u > 0.2 cross the plank's top, then the floor, whose point at x
+// sees x(i−1) over the plank while x·0.5 < 0.02 (u < 0.4). Those rays count twice.
+TEST(KernelCoverage, CountsEverySurfaceThatSeesTheOrigin) {
+    const Scene s = floorUnderPlank();
     const PhotonRay ray = photon({0.f, 1.f, 0.f}, {0, -1, 0}, 1.f, 0.1f, Vec3(0.f));
     EXPECT_NEAR(meanCoverage(s, ray, 400), 1.0 + massBelow(0.4) - massBelow(0.2), 0.02);
 }
@@ -118,18 +128,14 @@ TEST(KernelCoverage, CountsEverySurfaceThatSeesTheOrigin) {
 // Only surfaces within PhotonRay::kReceiverWindow radii of x(i) count. The plank of the test
 // above, seen from (0, 1, 0) with kernels of 5 cm: its top lies 0.48 in front of the floor,
 // past the window's 8 radii (0.4), so it does not count; the floor counts where a ray reaches it
-// directly (u < 0.4) and, under the plank, where it sees x(i−1) over the plank's edge
-// (x · 0.48 < 0.02: u < 0.83). Without the window the plank counts too.
+// directly (u < 0.4) and, under the plank, where it sees x(i−1) past the plank's edge
+// (x · 0.5 < 0.02: u < 0.8). Without the window the plank counts too.
 TEST(KernelCoverage, CountsOnlySurfacesNearTheEnd) {
-    Scene s;
-    uint32_t white = addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
-    addQuad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, white);
-    addBox(s, {0.02f, 0.5f, -1.f}, {1.f, 0.52f, 1.f}, white);
-    s.computeBounds();
+    const Scene s = floorUnderPlank();
     const float h = 0.05f;
     const PhotonRay ray = photon({0.f, 1.f, 0.f}, {0, -1, 0}, 1.f, h, Vec3(0.f));
     ASSERT_GT(ray.kernelBegin(true), 1.f - 0.5f) << "the plank must lie before the window";
-    const double seen = 0.02 / 0.48 / h;  // the floor's last point seen over the plank, in radii
+    const double seen = 0.02 / 0.5 / h;  // the floor's last point seen past the plank, in radii
     EXPECT_NEAR(meanCoverage(s, ray, 400), massBelow(seen), 0.02);
     EXPECT_NEAR(meanCoverage(s, ray, 400, false), massBelow(seen) + 1.0 - massBelow(0.4), 0.02);
 }
