@@ -96,28 +96,26 @@ def validate(binary, scene, outdir, size, reference_spp, mitsuba_spp):
     outdir = os.path.join(outdir, name)
     ref, ref_noise, halves = studyutil.reference(binary, scene, outdir, size, reference_spp, f"{name}: ")
     xml = gltf_to_mitsuba.convert(scene, os.path.join(outdir, "mitsuba"), size[0], size[1], mitsuba_spp)
-    mi_halves, walls = [], []
+    mi_halves, walls, mi_files = [], [], []
     for seed in (1, 2):
         log(f"{name}: Mitsuba half {seed}: {mitsuba_spp // 2} spp (cached when unchanged)")
-        rgb, wall = render_mitsuba(xml, os.path.join(outdir, f"mitsuba_{mitsuba_spp}spp_half{seed}.exr"),
-                                   mitsuba_spp // 2, seed)
+        mi_files.append(os.path.join(outdir, f"mitsuba_{mitsuba_spp}spp_half{seed}.exr"))
+        rgb, wall = render_mitsuba(xml, mi_files[-1], mitsuba_spp // 2, seed)
         mi_halves.append(rgb)
         walls.append(wall)
     ours = ref["beauty"]
     theirs = 0.5 * (mi_halves[0] + mi_halves[1])
     mi_noise = studyutil.half_noise(*mi_halves)
-    ob = [studyutil.block_means(h["beauty"], BLOCK) for h in halves]
-    mb = [studyutil.block_means(h, BLOCK) for h in mi_halves]
-    ours_b, theirs_b = 0.5 * (ob[0] + ob[1]), 0.5 * (mb[0] + mb[1])
-    block_noise = studyutil.half_noise(*ob) + studyutil.half_noise(*mb)
+    ours_b, theirs_b, block_err, block_noise = block_agreement([h["beauty"] for h in halves], mi_halves)
     result = {
+        "mitsuba_halves": mi_files,
         "scene": os.path.basename(scene),
         "variant": _variant,
         "mitsuba_spp": mitsuba_spp,
         "reference_spp": reference_spp,
         "rel_mse": images.rel_mse(ours, theirs),
         "noise": ref_noise + mi_noise,
-        "block_rel_mse": images.rel_mse(ours_b, theirs_b),
+        "block_rel_mse": block_err,
         "block_noise": block_noise,
         "mean_ours": ours.mean(axis=(0, 1)).tolist(),
         "mean_mitsuba": theirs.mean(axis=(0, 1)).tolist(),
@@ -144,6 +142,15 @@ def validate(binary, scene, outdir, size, reference_spp, mitsuba_spp):
     images.save_png(result["image"], np.hstack([images.to_srgb8(ours, e), pad, images.to_srgb8(theirs, e), pad,
                                                 zmap[:ours.shape[0], :ours.shape[1]]]))
     return result
+
+
+def block_agreement(ours, theirs):
+    """Two renders, each as two independent halves (or seeds): the averages' BLOCK × BLOCK block
+    means, their relative MSE, and its expected value from noise alone (both averages' noise)."""
+    ob = [studyutil.block_means(h, BLOCK) for h in ours]
+    tb = [studyutil.block_means(h, BLOCK) for h in theirs]
+    ours_b, theirs_b = 0.5 * (ob[0] + ob[1]), 0.5 * (tb[0] + tb[1])
+    return ours_b, theirs_b, images.rel_mse(ours_b, theirs_b), studyutil.half_noise(*ob) + studyutil.half_noise(*tb)
 
 
 def ratio(err, noise):
