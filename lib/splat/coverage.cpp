@@ -29,8 +29,10 @@ constexpr float kGoldenTurn = 0.38196601f;  // 2 − φ: successive probes a gol
 // where its ray crosses the tangent plane of the surface the photon leaves (rule 1), or at the
 // origin's depth, and ends with the cylinder. Like the splat, which takes every sample in the
 // cylinder and not only the first along each line, it counts every non-specular surface it
-// crosses whose point, lifted to the side the probe comes from, sees x(i−1) (rule 2). The
-// probes of a photon are parallel and their rule-2 rays share an end: one packet each.
+// crosses whose point, lifted to the side the probe comes from, sees x(i−1) (rule 2), and,
+// `windowed`, lies within the ray's receiver window (PhotonRay::kernelBegin and kernelEnd), as
+// the splat's samples must. The probes of a photon are parallel and their rule-2 rays share an
+// end: one packet each.
 float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float turn, bool windowed) {
     const Frame frame(ray.dir);
     const Vec3 n = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
