@@ -66,7 +66,8 @@ float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& pl
     if (!(probe.biasChange > 0.0)) return 1.f;
     // 2^(−k/20), k = 0 … 40: ¼ to 1 in steps of 3.5 %.
     float best = 1.f;
-    double least = expectedKernelError(probe, plan, 1.f);
+    const double atOne = expectedKernelError(probe, plan, 1.f);
+    double least = atOne;
     for (int k = 1; k <= 40; ++k) {
         const float m = float(std::exp2(-k / 20.0));
         const double e = expectedKernelError(probe, plan, m);
@@ -74,7 +75,7 @@ float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& pl
     }
     // The estimates come from a quarter of a pass's photons, and heavy-tailed light (glossy
     // lobes, caustics) makes them noisy: a scale is kept only for a clear gain.
-    return expectedKernelError(probe, plan, 1.f) >= kMinKernelGain * least ? best : 1.f;
+    return atOne >= kMinKernelGain * least ? best : 1.f;
 }
 
 }  // namespace rs
