@@ -174,6 +174,11 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
              "of the indirect light "
              "(default " + numberText(d.splat.minCoverage) + ", 0..1; 0: none)",
              [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
+    cmd.add({"--receiver-spacing", "F",
+             "with --visibility rays, indirect photons land on receivers F times the smallest indirect kernel radius "
+             "apart, and every eye sample takes the mean of those near it on its surface (default " +
+                 numberText(d.splat.receiverSpacing) + ", 0..4; 0: on every eye sample)",
+             [&](const std::string& v) { cfg.receiverSpacing = parseFloat("--receiver-spacing", v); }});
     cmd.add({"--direct-spp", "N",
              "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
              "and normal, apart from the photons' receivers (default " + std::to_string(d.splat.directSpp) +

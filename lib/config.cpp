@@ -91,6 +91,7 @@ void RenderConfig::validate() const {
     requireRange("direct-spp", directSpp, 0, 1 << 16);
     requireRange("coverage-probes", coverageProbes, 0, CoverageSettings::kMaxProbes);
     requireRange("min-coverage", minCoverage, 0, 1);
+    requireRange("receiver-spacing", receiverSpacing, 0, 4);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
     if (kernelScale != 0.f) requireRange("kernel-scale", kernelScale, 0.05, 4);
@@ -209,6 +210,7 @@ ImageAttributes RenderConfig::attributes() const {
             a["visibility"] = visibilityName(visibilityUsed());
             if (visibilityUsed() == Visibility::Rays) a["coverageProbes"] = std::to_string(coverageProbes);
             if (visibilityUsed() == Visibility::Rays) a["minCoverage"] = std::to_string(minCoverage);
+            if (visibilityUsed() == Visibility::Rays) a["receiverSpacing"] = numberText(receiverSpacing);
         }
     }
     return a;

@@ -12,6 +12,7 @@
 #include "scene/environment.h"
 #include "splat/coverage.h"
 #include "splat/eye.h"
+#include "splat/irradiance.h"
 #include "splat/photons.h"
 
 namespace rs {
@@ -119,6 +120,9 @@ struct RenderConfig {
     // The least coverage a photon's flux is divided by: a bound on its weight against fireflies,
     // at a measured bias (CoverageSettings::minCoverage). 0: none.
     float minCoverage = CoverageSettings{}.minCoverage;
+    // The indirect photons' receivers, this many of the smallest indirect kernel radius apart
+    // (IrradianceSettings); 0: every eye sample. Only with visibility by rays.
+    float receiverSpacing = IrradianceSettings{}.spacing;
 
     // Occlusion grid (docs/design.md §5–6).
     int grid = GridSettings{}.resolution;             // voxels along the scene's longest axis
@@ -151,6 +155,8 @@ struct RenderConfig {
     // Whether the receiver rules alone decide visibility (kernels reaching to the scene's bounds,
     // their coverage measured).
     bool visibilityByRays() const { return method == Method::Splat && visibilityUsed() == Visibility::Rays; }
+    // Whether indirect photons land on sparse receivers (irradiance.h).
+    bool sparseReceivers() const { return visibilityByRays() && receiverSpacing > 0.f; }
     void validate() const;
     // The grid settings only (validate() includes them): for commands without an image.
     void validateGrid() const;

@@ -14,6 +14,7 @@
 #include "scene/accel.h"
 #include "splat/coverage.h"
 #include "splat/eye.h"
+#include "splat/irradiance.h"
 #include "splat/kernel_scale.h"
 #include "grid/grid_stage.h"
 #include "occlusion/kdtree.h"
@@ -223,11 +224,61 @@ void reportReplayed(const RenderContext& c, const PhotonRay& traced, const Photo
     c.reporter.info(buf);
 }
 
-// `photons` with their kernels' coverage measured, where the render measures it.
-PhotonMap withCoverage(const RenderContext& c, PhotonMap photons, const CoverageSettings& cs) {
-    if (cs.probes > 0 && c.cfg.visibilityByRays()) normalizeKernelCoverage(c.accel, photons, cs, c.pool, c.reporter);
-    return photons;
-}
+// What a pass's photons land on (docs/design.md §8): every eye sample, through the occlusion tree
+// over them, for direct and caustic photons; with sparse receivers (irradiance.h) the indirect
+// photons on the receivers, through a tree of their own, gathered back to the eye samples. In a
+// pass shared by the ranks the receivers' light is summed at rank 0 before the gather, so the
+// image is a single process's to the bit.
+class PassTargets {
+public:
+    // `samples` in pixel order, as the eye pass gives them; spacing 0: no sparse receivers.
+    PassTargets(const RenderContext& c, const OcclusionGrid& grid, EyeSamples& samples, float spacing,
+                OcclusionTreeStats* treeStats)
+        : c_(c), samples_(samples) {
+        if (spacing > 0.f) {
+            receivers_ = chooseReceivers(samples, c.width, c.height, spacing, c.pool);
+            receiverTree_ = buildOcclusionTree(grid, receivers_.samples, c.pool);
+            sparse_ = true;
+        }
+        tree_ = buildOcclusionTree(grid, samples, c.pool, treeStats);
+    }
+
+    const OcclusionTree& tree() const { return tree_; }
+    size_t receivers() const { return sparse_ ? receivers_.slots() : samples_.size(); }
+
+    // Adds `photons`' light (this rank's share, settings.share of settings.shares) to `part`.
+    void splat(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, SplatTotals* totals) const {
+        SplatStats* stats = totals ? &totals->splat : nullptr;
+        CoverageStats* coverage = totals ? &totals->coverage : nullptr;
+        if (!sparse_) {
+            splatPhotons(c_.accel, tree_, samples_, photons, settings, part, c_.pool, c_.reporter, stats, coverage);
+            return;
+        }
+        PhotonMap indirect = photons, others = photons;
+        indirect.rays.clear(), others.rays.clear();
+        for (const PhotonRay& r : photons.rays) (r.cls == kPhotonIndirect ? indirect : others).rays.push_back(r);
+        if (!others.rays.empty())
+            splatPhotons(c_.accel, tree_, samples_, others, settings, part, c_.pool, c_.reporter, stats, coverage);
+        if (indirect.rays.empty()) return;
+        FixedFilm slots;
+        slots.width = int(receivers_.slots()), slots.height = 1;
+        slots.buffers[kIndirect].assign(receivers_.slots() * 3, 0);
+        SplatSettings sparse = settings;
+        sparse.visibilityPlanes = false;  // a few rays a photon: finding the triangles near it cost more than they spared
+        splatPhotons(c_.accel, receiverTree_, receivers_.samples, indirect, sparse, slots, c_.pool, c_.reporter, stats, coverage);
+        if (settings.shares > 1) c_.ranks.sumAtRoot(slots.buffers[kIndirect]);
+        if (settings.share == 0)
+            gatherIrradiance(receivers_, samples_, slots.buffers[kIndirect], FixedFilm::kScale, part.buffers[kIndirect], c_.pool);
+    }
+
+private:
+    const RenderContext& c_;
+    EyeSamples& samples_;
+    OcclusionTree tree_;
+    bool sparse_ = false;
+    IrradianceReceivers receivers_;
+    OcclusionTree receiverTree_;
+};
 
 // The scale at which the first pass keeps its probed quarter's light, for the scale m chosen.
 float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
@@ -239,9 +290,8 @@ float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
 // other three quarters' at m.
 class KernelScaleProbeStep {
 public:
-    KernelScaleProbeStep(const RenderContext& c, const OcclusionTree& tree, const EyePass& eye, const SplatSettings& splat,
-                         CoverageSettings coverage)
-        : c_(c), tree_(tree), eye_(eye), splat_(splat), coverage_(coverage), values_(size_t(c.width) * c.height * 3) {}
+    KernelScaleProbeStep(const RenderContext& c, const PassTargets& targets, const EyePass& eye, const SplatSettings& splat)
+        : c_(c), targets_(targets), eye_(eye), splat_(splat), values_(size_t(c.width) * c.height * 3) {}
 
     // `indirect`: the pass's indirect photons before their coverage; `other`: seconds of the
     // pass apart from their splat; `whole`: runs since the passes began. Adds their light to
@@ -257,11 +307,10 @@ public:
         double seconds[2];  // the quarter's splat at 1 and at ½
         for (int f = 0; f < 2; ++f) {
             Timer t;
-            const PhotonMap scaled =
-                withCoverage(c_, scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps), coverage_);
+            const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps);
             mine[f].assign(values_, 0);
             for (int h = 0; h < 2; ++h) {
-                splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f ? nullptr : &totals.splat);
+                splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f ? nullptr : &totals);
                 std::copy(part.buffers[kIndirect].begin(), part.buffers[kIndirect].end(), halves.begin() + (2 * f + h) * values_);
                 for (size_t i = 0; i < values_; ++i) mine[f][i] += part.buffers[kIndirect][i];
             }
@@ -306,9 +355,7 @@ public:
         std::vector<int64_t>& light = sum.buffers[kIndirect];
         const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
         for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
-        splatInto(withCoverage(c_, scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
-                               coverage_),
-                  part, &totals.splat);
+        splatInto(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps), part, &totals);
         sum.add(part);
         return m;
     }
@@ -317,10 +364,9 @@ public:
 
     // Ray `index` of the first pass's photons (path order, before coverage) as that pass
     // splatted it under the probe, the scale m chosen: in its part (the other classes, the
-    // probed quarter of the indirect ones or the rest), at that part's scale, with the coverage
-    // measured over that part.
+    // probed quarter of the indirect ones or the rest), at that part's scale.
     static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
-                                const PhotonSettings& ps, const CoverageSettings& cs) {
+                                const PhotonSettings& ps) {
         PhotonMap part = traced;
         part.rays.clear();
         const bool indirect = traced.rays[index].cls == kPhotonIndirect;
@@ -337,7 +383,7 @@ public:
                                  kPhotonIndirect, probed ? keptProbeScale(m) : m, ps);
             at -= probed ? 0 : quarter;
         }
-        return withCoverage(c, part, cs).rays[at];
+        return part.rays[at];
     }
 
 private:
@@ -349,16 +395,15 @@ private:
         out.rays.assign(photons.rays.begin() + first, photons.rays.begin() + last);
         return out;
     }
-    void splatInto(const PhotonMap& photons, FixedFilm& part, SplatStats* stats) const {
+    void splatInto(const PhotonMap& photons, FixedFilm& part, SplatTotals* totals) const {
         for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
-        splatPhotons(c_.accel, tree_, eye_.samples, photons, splat_, part, c_.pool, c_.reporter, stats);
+        targets_.splat(photons, splat_, part, totals);
     }
 
     const RenderContext& c_;
-    const OcclusionTree& tree_;
+    const PassTargets& targets_;
     const EyePass& eye_;
     const SplatSettings& splat_;
-    const CoverageSettings coverage_;
     const size_t values_;
     double nextSeconds_ = 0.0;
 };
@@ -378,6 +423,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
     PhotonSettings ps = photonSettings(c.cfg, grid.geometry.voxelSize);
     CoverageSettings cs = coverageSettings(c.cfg);
     const bool coverage = c.cfg.visibilityByRays() && cs.probes > 0;
+    const bool sparse = c.cfg.sparseReceivers();
     SplatSettings splat = splatSettings(c.cfg);
     SplatTotals totals;
     // The indirect kernels' scale: given, or measured by the first pass (kernel_scale.h).
@@ -400,8 +446,13 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
 
         t = Timer();
         OcclusionTreeStats ts;
-        OcclusionTree tree = buildOcclusionTree(grid, eye.samples, c.pool, &ts);
+        const float spacing = sparse ? c.cfg.receiverSpacing * ps.minRadius[kPhotonIndirect] * grid.geometry.voxelSize *
+                                           passRadiusScale(pass, c.cfg.alpha) *
+                                           (probing && pass == 0 ? 0.5f : ps.classScale[kPhotonIndirect])
+                                     : 0.f;
+        const PassTargets targets(c, grid, eye.samples, spacing, &ts);
         stats.addTime("tree", t.seconds());
+        stats.setCount("receivers", double(targets.receivers()));
         ts.report(stats);
         if (pass == 0 && ts.samplesOutside > 0)
             c.reporter.warn(c.scene.path + ": " + std::to_string(ts.samplesOutside) +
@@ -425,25 +476,24 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
             photons.rays.erase(begin, photons.rays.end());
         }
         const PhotonRay traced = replay ? replayedRay(c, photons) : PhotonRay{};
-        // The kernels' coverage, measured as the receiver rules will see it (docs/design.md §8).
-        if (coverage) {
-            t = Timer();
-            cs.pass = uint64_t(pass);
-            normalizeKernelCoverage(c.accel, photons, cs, c.pool, c.reporter, &totals.coverage);
-            stats.addTime("coverage", t.seconds());
-            totals.coverage.report(stats);
-        }
+        // The kernels' coverage is measured by the splat, as the receiver rules will see it, for
+        // the photons that reach an eye sample (docs/design.md §8).
+        cs.pass = uint64_t(pass);
+        splat.coverage = coverage ? &cs : nullptr;
         photons.report(stats);
         totals.photonsStored += int64_t(photons.rays.size() + indirect.rays.size());
         totals.photonMb = std::max(totals.photonMb, double(photons.bytes()) / kMB);
 
-        if (replay) {  // that ray alone, after its coverage, and no light of the eye pass's
+        if (replay) {  // that ray alone, and no light of the eye pass's
             const PhotonRay ray = probeTraced.rays.empty()
                                       ? photons.rays[size_t(c.cfg.replayIndex)]
                                       : KernelScaleProbeStep::asSplatted(c, probeTraced, size_t(c.cfg.replayIndex),
-                                                                         ps.classScale[kPhotonIndirect], passPs, cs);
+                                                                         ps.classScale[kPhotonIndirect], passPs);
             photons.rays.assign(1, ray);
-            reportReplayed(c, traced, ray, grid.geometry.voxelSize);
+            PhotonRay covered = ray;  // as the splat will cover it
+            CoverageStats unused;
+            if (coverage) normalizeCoverage(c.accel, covered, cs, unused);
+            reportReplayed(c, traced, covered, grid.geometry.voxelSize);
         }
         // The eye pass's own light (emission, albedo, normal, sampled direct light), then the
         // photons' (this rank's share of them).
@@ -451,11 +501,11 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         if (share.share == 0 && !replay) sum.add(eye.film);
         splat.share = share.share;
         splat.shares = share.shares;
-        splatPhotons(c.accel, tree, eye.samples, photons, splat, sum, c.pool, c.reporter, &totals.splat);
+        targets.splat(photons, splat, sum, &totals);
         const double other = whole.seconds();
         if (probe) {
             cs.pass = uint64_t(pass);
-            KernelScaleProbeStep step(c, tree, eye, splat, cs);
+            KernelScaleProbeStep step(c, targets, eye, splat);
             const float m = step.run(indirect, passPs, sum, totals, whole, other);
             nextPass = step.nextSeconds();
             ps.classScale[kPhotonIndirect] = m;
@@ -469,6 +519,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
         stats.setCount("radius_scale", ps.radiusScale);
         stats.setCount("kernel_scale", ps.classScale[kPhotonIndirect]);
         totals.splat.report(stats);
+        if (coverage) totals.coverage.report(stats);
     };
     const bool replay = c.cfg.replays();
     if (replay && probing) {  // the scale, as the render's first pass chooses it

@@ -37,13 +37,19 @@ double massBelow(double a) {
     return inside / all;
 }
 
-// The mean coverage of `count` copies of `ray` (their probes turned differently), through
-// normalizeKernelCoverage: the flux divided by the coverage gives it back.
+// The mean coverage of `count` copies of `ray`, through normalizeKernelCoverage: the flux divided
+// by the coverage gives it back. The copies start a micrometre apart along the ray, so that
+// their probes turn differently (the turn is a hash of the ray).
 double meanCoverage(const Scene& scene, const PhotonRay& ray, int count, bool receiverWindow = true) {
     RayAccel accel(scene, 1);
     ThreadPool pool(2);
     PhotonMap map;
-    map.rays.assign(size_t(count), ray);
+    for (int k = 0; k < count; ++k) {
+        PhotonRay copy = ray;
+        copy.origin += ray.dir * (1e-6f * float(k));
+        copy.length -= 1e-6f * float(k);
+        map.rays.push_back(copy);
+    }
     CoverageSettings cs;
     cs.receiverWindow = receiverWindow;
     CoverageStats stats;

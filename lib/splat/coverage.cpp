@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "core/log.h"
 #include "core/parallel.h"
@@ -77,6 +78,35 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
 
 }  // namespace
 
+// The probes' turn of a ray: a hash of its bits, the seed and the pass.
+static float probeTurn(const PhotonRay& ray, const CoverageSettings& settings) {
+    uint32_t bits[6];
+    std::memcpy(bits, &ray.origin, 12);
+    std::memcpy(bits + 3, &ray.dir, 12);
+    uint64_t h = settings.pass;
+    for (uint32_t b : bits) h = mix64(h ^ b);
+    return toUnitFloat(uint32_t(hashKey(settings.seed, Stage::Coverage, h)));
+}
+
+void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& st) {
+    const float turn = probeTurn(ray, settings);
+    float c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
+    if (c < CoverageSettings::kShrinkBelow) {
+        // The same absolute reach past x(i): it is the scene's bounds or h·tan θ at the hit.
+        ray.radius *= 0.5f;
+        ray.reach *= 2.f;
+        c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
+        ++st.shrunk;
+    }
+    ++st.photons;
+    st.coverageSum += c;
+    if (c < 1.f) ++st.partial;
+    if (c > 0.f)
+        ray.flux /= std::max(c, settings.minCoverage);
+    else
+        ++st.uncovered;
+}
+
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
                              ThreadPool& pool, Reporter& reporter, CoverageStats* statsOut) {
     constexpr int64_t kChunk = 1024;
@@ -85,26 +115,7 @@ void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const Co
     reporter.begin("kernel coverage", n, "photons");
     pool.parallelFor(n, kChunk, [&](int64_t b, int64_t e, int) {
         CoverageStats& st = stats[size_t(b / kChunk)];
-        for (int64_t i = b; i < e; ++i) {
-            PhotonRay& ray = photons.rays[size_t(i)];
-            const uint64_t key = hashKey(settings.seed, Stage::Coverage, settings.pass << PhotonSettings::kPathsPerPassBits | uint64_t(i));
-            const float turn = toUnitFloat(uint32_t(key));
-            float c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
-            if (c < CoverageSettings::kShrinkBelow) {
-                // The same absolute reach past x(i): it is the scene's bounds or h·tan θ at the hit.
-                ray.radius *= 0.5f;
-                ray.reach *= 2.f;
-                c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
-                ++st.shrunk;
-            }
-            ++st.photons;
-            st.coverageSum += c;
-            if (c < 1.f) ++st.partial;
-            if (c > 0.f)
-                ray.flux /= std::max(c, settings.minCoverage);
-            else
-                ++st.uncovered;
-        }
+        for (int64_t i = b; i < e; ++i) normalizeCoverage(accel, photons.rays[size_t(i)], settings, st);
         reporter.advance(e - b);
     });
     reporter.end();

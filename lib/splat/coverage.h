@@ -19,6 +19,7 @@ class RayAccel;
 class ThreadPool;
 class Reporter;
 struct PhotonMap;
+struct PhotonRay;
 
 struct CoverageSettings {
     static constexpr int kMaxProbes = 16;  // one Embree packet
@@ -71,10 +72,14 @@ struct CoverageStats {
     }
 };
 
-// Measures each photon ray's kernel coverage c, halves the kernel and measures again where c <
-// kShrinkBelow, and divides the flux by max(c, minCoverage) (photons whose probes all miss keep
-// their flux: nothing measured to divide by). The result does not depend on the
-// thread count.
+// Measures one photon ray's kernel coverage c, halves the kernel and measures again where c <
+// kShrinkBelow, and divides the flux by max(c, minCoverage) (a photon whose probes all miss
+// keeps its flux: nothing measured to divide by). The probes' turn is a function of (seed, pass,
+// the ray itself), so a ray's coverage does not depend on which map or thread holds it. The
+// splat measures it for the photons that reach an eye sample, just before their light lands.
+void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& stats);
+
+// normalizeCoverage for every photon ray of the map.
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
                              ThreadPool& pool, Reporter& reporter, CoverageStats* stats = nullptr);
 

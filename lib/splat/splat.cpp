@@ -406,6 +406,40 @@ void PhotonSplat::deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& 
 }
 #endif
 
+// The samples a photon's cylinder reached, with their mask visibility (1 with visibility by
+// rays), in the traversal's order: kept while the photon's coverage is measured.
+struct ReachedSamples {
+    std::vector<uint32_t> index;
+    std::vector<float> visibility;
+
+    void clear() { index.clear(), visibility.clear(); }
+    auto visitor() {
+        return Overloaded{[this](uint32_t i, float v) { index.push_back(i), visibility.push_back(v); },
+                          [this](const uint32_t* i, size_t count) {
+                              index.insert(index.end(), i, i + count);
+                              visibility.insert(visibility.end(), count, 1.f);
+                          },
+                          [this](const uint32_t* i, const float* v, size_t count) {
+                              index.insert(index.end(), i, i + count);
+                              visibility.insert(visibility.end(), v, v + count);
+                          }};
+    }
+    // Whether one of them lies in the kernel and its window and faces the photon
+    // (PhotonSplat::receiveOne's tests before the receiver rules).
+    bool anyFacing(const EyeSamples& samples, const PhotonRay& ray, bool windowed) const {
+        const float begin = ray.kernelBegin(windowed), end = ray.kernelEnd(windowed), h2 = ray.radius * ray.radius;
+        const Vec3* units = unitTable();
+        for (uint32_t i : index) {
+            const Vec3 oy = samples.position[i] - ray.origin;
+            const float t = glm::dot(oy, ray.dir);
+            if (!(t > begin && t <= end) || !(glm::dot(oy, oy) - t * t < h2)) continue;
+            if (glm::dot(units[samples.normal[i]], ray.dir) < 0.f && glm::dot(units[samples.geomNormal[i]], ray.dir) < 0.f)
+                return true;
+        }
+        return false;
+    }
+};
+
 // Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
 void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, FixedFilm& film) {
     for (const std::vector<int64_t>& buf : acc) {
@@ -422,7 +456,7 @@ void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, FixedFilm& f
 
 void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
                   const PhotonMap& photons, const SplatSettings& settings, FixedFilm& film, ThreadPool& pool,
-                  Reporter& reporter, SplatStats* statsOut) {
+                  Reporter& reporter, SplatStats* statsOut, CoverageStats* coverageOut) {
     const size_t pixels = film.pixelCount();
     const int threads = pool.size();
     std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
@@ -433,14 +467,34 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
     const int64_t first = std::min(int64_t(photons.rays.size()), chunks * settings.share / settings.shares * SplatSettings::kChunk);
     const int64_t last = std::min(int64_t(photons.rays.size()), chunks * (settings.share + 1) / settings.shares * SplatSettings::kChunk);
 
+    std::vector<ReachedSamples> reached(threads);
+    std::vector<CoverageStats> coverage(threads);
     reporter.begin("splatting", last - first, "photons");
     pool.parallelFor(last - first, SplatSettings::kChunk, [&](int64_t b, int64_t e, int thread) {
         std::vector<int64_t>& buf = acc[thread];
         if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
         for (int64_t p = first + b; p < first + e; ++p) {
-            const PhotonRay& ray = photons.rays[order[size_t(p)]];
-            PhotonSplat splat(accel, samples, ray, settings, &buf[size_t(ray.cls) * pixels * 3], stats[thread]);
-            traverseCylinder(tree, samples, cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow), scratch[thread],
+            PhotonRay ray = photons.rays[order[size_t(p)]];
+            int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
+            const Cylinder cylinder = cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow);
+            if (settings.coverage) {
+                // The samples first, then the coverage where one of them may take light, then the
+                // light, with the kernel the coverage left (the same or halved: inside this cylinder).
+                ReachedSamples& r = reached[thread];
+                r.clear();
+                traverseCylinder(tree, samples, cylinder, scratch[thread], r.visitor(), &stats[thread].traversal);
+                if (!r.anyFacing(samples, ray, settings.receiverWindow)) {
+                    ++stats[thread].unseen;
+                    continue;
+                }
+                normalizeCoverage(accel, ray, *settings.coverage, coverage[thread]);
+                PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread]);
+                splat.receiveSeen(r.index.data(), r.visibility.data(), r.index.size());
+                splat.finish();
+                continue;
+            }
+            PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread]);
+            traverseCylinder(tree, samples, cylinder, scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
                                         [&](const uint32_t* index, const float* visibility, size_t count) {
@@ -455,6 +509,8 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
     addThreadBuffers(acc, film);
     if (statsOut)
         for (const SplatStats& s : stats) statsOut->add(s);
+    if (coverageOut)
+        for (const CoverageStats& s : coverage) coverageOut->add(s);
 }
 
 }  // namespace rs

@@ -15,6 +15,7 @@
 #include "output/film.h"
 #include "scene/accel.h"
 #include "occlusion/kdtree_traverse.h"
+#include "splat/coverage.h"
 #include "splat/photons.h"
 
 namespace rs {
@@ -26,11 +27,12 @@ class Reporter;
 // Contributions: (photon, eye sample) pairs that received energy. Visibility rays: Embree
 // occlusion rays of the receiver rules; visible by planes: rule 2 decided without a ray
 // (SegmentReceivers). Refused: samples the receiver rules refused, behind the origin's plane or
-// hidden from it.
+// hidden from it. Unseen: photons (with the coverage measured in the splat) whose cylinder held
+// no eye sample that faces them, so that neither coverage nor rays were spent on them.
 #define RS_SPLAT_COUNTERS(X)                                                                         \
     X(contributions, "splat_contributions") X(visibilityRays, "splat_visibility_rays")                \
     X(visibleByPlanes, "splat_visible_by_planes") X(refusedBehindOrigin, "splat_refused_behind_origin") \
-    X(refusedHidden, "splat_refused_hidden")
+    X(refusedHidden, "splat_refused_hidden") X(unseen, "splat_photons_unseen")
 struct SplatStats {
     TraversalStats traversal;
     RS_SPLAT_COUNTERS(RS_COUNTER_MEMBER)
@@ -180,6 +182,10 @@ struct SplatSettings {
     // Only surfaces within PhotonRay::kReceiverWindow radii of x(i) receive (the kernel coverage
     // counts the same): with visibility by rays, not with the paper's mask.
     bool receiverWindow = true;
+    // Non-null: each photon's kernel coverage is measured (normalizeCoverage) once its cylinder
+    // has reached an eye sample that may receive it, and not for the photons whose kernels land
+    // where the camera sees nothing (half of them on the staircase interior).
+    const CoverageSettings* coverage = nullptr;
     static constexpr int64_t kChunk = 256;
 };
 
@@ -188,6 +194,6 @@ struct SplatSettings {
 // summed as 64-bit fixed-point integers, whose sum does not depend on order.
 void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSamples& samples,
                   const PhotonMap& photons, const SplatSettings& settings, FixedFilm& film, ThreadPool& pool,
-                  Reporter& reporter, SplatStats* stats = nullptr);
+                  Reporter& reporter, SplatStats* stats = nullptr, CoverageStats* coverageStats = nullptr);
 
 }  // namespace rs
