@@ -133,8 +133,13 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
     }
 }
 
-// A class that the probe shows cannot be filled within maxPaths (no glass: no caustics)
-// keeps what it can get and hands the rest of its quota to the others, by their split.
+// A class that the probe shows cannot be filled within maxPaths (no glass: no caustics, or a
+// little glass that few paths reach) keeps what it can get within a share of the paths and
+// hands the rest of its quota to the others, by their split. The share: half the path budget,
+// and no more than kRareClassPaths times the paths the fillable classes need. On the staircase
+// interior the caustics' 4 % of the photons took 2.2 M paths, 90 % of the photon tracing, for
+// 1 % of the image's error; their 500 within the bound render with the same error.
+constexpr double kRareClassPaths = 16.0;
 void rebalanceQuotas(const std::vector<std::vector<PhotonRay>>& probe, int64_t maxPaths, const PhotonSettings& st,
                      int64_t quota[kPhotonClassCount], bool open[kPhotonClassCount]) {
     int64_t yield[kPhotonClassCount] = {};
@@ -142,11 +147,15 @@ void rebalanceQuotas(const std::vector<std::vector<PhotonRay>>& probe, int64_t m
         for (const PhotonRay& r : path) yield[r.cls]++;
     int64_t spare = 0;
     bool fillable[kPhotonClassCount];
+    double needed = 0.0;  // paths the fillable classes need
     for (int c = 0; c < kPhotonClassCount; ++c) {
-        double reachable = double(yield[c]) * double(maxPaths) / double(probe.size());
-        fillable[c] = open[c] && reachable >= double(quota[c]);
+        fillable[c] = open[c] && double(yield[c]) * double(maxPaths) / double(probe.size()) >= double(quota[c]);
+        if (fillable[c]) needed = std::max(needed, double(quota[c]) * double(probe.size()) / double(yield[c]));
+    }
+    const double share = needed > 0.0 ? std::min(0.5 * double(maxPaths), kRareClassPaths * needed) : 0.5 * double(maxPaths);
+    for (int c = 0; c < kPhotonClassCount; ++c) {
         if (open[c] && !fillable[c]) {
-            int64_t keep = int64_t(reachable * 0.5);  // what half the path budget gives
+            const int64_t keep = int64_t(double(yield[c]) * share / double(probe.size()));
             spare += quota[c] - keep;
             quota[c] = keep;
             open[c] = keep > 0;
