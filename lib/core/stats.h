@@ -46,4 +46,11 @@ private:
     std::chrono::steady_clock::time_point start_;
 };
 
+// A time the user asked a render to end by: seconds on a Timer's clock (no clock: none).
+struct Deadline {
+    const Timer* clock = nullptr;
+    double seconds = 0.0;
+    bool passed() const { return clock && clock->seconds() >= seconds; }
+};
+
 }  // namespace rs

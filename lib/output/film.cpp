@@ -64,10 +64,14 @@ void FixedFilm::add(const FixedFilm& other) {
     }
 }
 
+void FixedFilm::countPhotonPass(const double share[3]) {
+    for (int c = 0; c < 3; ++c) photonPasses[c] += std::llround(std::clamp(share[c], 0.0, 1.0) * kScale);
+}
+
 Film FixedFilm::average(int passes) const {
     Film film(width, height);
-    const double scale = 1.0 / (kScale * double(std::max(passes, 1)));
     for (int b = 0; b < kBuffers; ++b) {
+        const double scale = 1.0 / (b < 3 && photonPasses[b] > 0 ? double(photonPasses[b]) : kScale * double(std::max(passes, 1)));
         std::vector<Vec3>& to = film.buffer(b);
         const int64_t* from = buffers[b].data();
         for (size_t i = 0; i < to.size(); ++i)

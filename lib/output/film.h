@@ -39,15 +39,22 @@ struct FixedFilm {
     // Per buffer (the layers, then albedo, then normal): pixel × rgb.
     static constexpr int kBuffers = kLayerCount + 2;
     std::vector<int64_t> buffers[kBuffers];
+    // Per photon layer (direct, indirect, caustic): the passes counted, each by the share of its
+    // photons it splatted (fixed point; a pass cut short by a time limit counts its share). No
+    // pass counted: the layers are averaged over the passes, as the others.
+    int64_t photonPasses[3] = {0, 0, 0};
 
     FixedFilm() = default;
     FixedFilm(int w, int h);
+    // Counts a pass that splatted `share[c]` (0..1] of each photon class's light.
+    void countPhotonPass(const double share[3]);
     size_t pixelCount() const { return size_t(width) * height; }
     static int64_t toFixed(float v);
     static void addSaturating(int64_t& sum, int64_t v);
     void add(const FixedFilm& other);  // its buffers that it holds (all, or a splat's layers)
     void add(const Film& film);  // every buffer of `film`, pixelwise
-    // The average of `passes` passes, as a float film.
+    // The average of `passes` passes, as a float film (the photon layers over their counted
+    // passes, where counted).
     Film average(int passes) const;
 };
 

@@ -105,6 +105,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
             r.cls = depth == 0 ? kPhotonDirect : specularOnly ? kPhotonCaustic : kPhotonIndirect;
             r.density = collimated ? prefix * collimatedDensity : prefix * lastPdf / std::max(sqr(lengthSince), 1e-12f);
             r.radius = 0.f;
+            r.path = uint32_t(n - st.firstPath);
             if (open[r.cls]) out.push_back(r);
         }
 
@@ -200,7 +201,7 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
     quota[kPhotonIndirect] += st.photons - assigned;
     bool open[kPhotonClassCount];
     for (int c = 0; c < kPhotonClassCount; ++c) open[c] = quota[c] > 0;
-    const int64_t maxPaths = st.maxPaths > 0 ? st.maxPaths : 50 * st.photons;
+    const int64_t maxPaths = std::min<int64_t>(st.maxPaths > 0 ? st.maxPaths : 50 * st.photons, int64_t(UINT32_MAX) - kProbePaths);
 
     reporter.begin("photon tracing", st.photons, "photons");
     std::vector<std::vector<PhotonRay>> perPath;

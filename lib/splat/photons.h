@@ -36,6 +36,10 @@ struct PhotonRay {
                         // (with PhotonSettings::reachToBounds, at least to where the ray leaves the scene)
     uint8_t cls;        // PhotonClass
     uint8_t pad[3] = {0, 0, 0};  // no indeterminate bytes: photon arrays compare with memcmp
+    // The index of its path among the pass's (from PhotonSettings::firstPath): the photons of
+    // paths [0, P) are an unbiased share P / N_c of their class's light (a pass cut short by a
+    // time limit splats such a share).
+    uint32_t path = 0;
 
     // A segment meeting a flat receiver at angle θ from its normal puts the parallel rays of
     // its kernel disc down up to h·tan θ past x(i): the cylinder must reach that far.
@@ -82,7 +86,7 @@ struct PhotonSettings {
     // hit, so a kernel that half-misses a convex edge or a thin part loses nothing there. (Cut
     // at reachOf, the staircase interior's indirect light lost 4 % more.)
     bool reachToBounds = false;
-    int64_t maxPaths = 0;                    // 0: 50 × photons
+    int64_t maxPaths = 0;                    // 0: 50 × photons (at most 2^32 − 1: PhotonRay::path)
 };
 
 struct Stats;

@@ -1,0 +1,395 @@
+// One pass of photon ray splatting, in order (splat_pass.h): eye pass → receivers and trees →
+// photons → splat (the first pass: with the kernel scale's probe). Every stage's settings are
+// built here from the RenderConfig, once.
+#include "splat_pass.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/error.h"
+#include "grid/grid_stage.h"
+#include "occlusion/kdtree.h"
+#include "scene/accel.h"
+#include "scene/lights.h"
+#include "scene/scene.h"
+#include "splat/kernel_scale.h"
+#include "splat/targets.h"
+
+namespace rs {
+
+namespace {
+
+// -- The stages' settings, from the RenderConfig (here only) ----------------------------------
+
+EyePassSettings eyePassSettings(const RenderContext& c) {
+    EyePassSettings es;
+    es.width = c.width;
+    es.height = c.height;
+    es.spp = c.cfg.samplesPerPixel();
+    es.maxSpecularDepth = c.cfg.maxDepth;
+    es.directSamples = c.cfg.directBySampling() ? c.cfg.lightSamples : 0;
+    es.directSpp = c.cfg.directBySampling() ? c.cfg.directSpp : 0;
+    es.seed = c.cfg.seed;
+    return es;
+}
+
+PhotonSettings photonSettings(const RenderConfig& cfg, float voxelSize) {
+    PhotonSettings ps;
+    ps.photons = cfg.photons;
+    ps.split = cfg.photonSplit();
+    ps.k = cfg.kernelPhotons;
+    ps.minRadius = cfg.minRadius;
+    ps.maxRadius = cfg.maxRadius;
+    ps.voxelSize = voxelSize;
+    ps.maxDepth = cfg.maxDepth;
+    ps.seed = cfg.seed;
+    ps.reachToBounds = cfg.visibilityByRays();
+    ps.classScale[kPhotonIndirect] = cfg.probesKernelScale() ? 1.f : cfg.kernelScaleOrOne();
+    return ps;
+}
+
+CoverageSettings coverageSettings(const RenderConfig& cfg) {
+    CoverageSettings cs;
+    cs.probes = cfg.coverageProbes;
+    cs.minCoverage = cfg.minCoverage;
+    cs.seed = cfg.seed;
+    return cs;
+}
+
+SplatSettings splatSettings(const RenderConfig& cfg) {
+    SplatSettings splat;
+    splat.visibility = cfg.method == Method::Splat;
+    splat.receiverWindow = cfg.visibilityByRays();
+    return splat;
+}
+
+// The share of each photon class's light that a splat of the pass's paths [0, covered) gives.
+void classShares(const PhotonMap& photons, uint64_t coveredOthers, uint64_t coveredIndirect, double share[3]) {
+    for (int c = 0; c < kPhotonClassCount; ++c) {
+        const uint64_t covered = c == kPhotonIndirect ? coveredIndirect : coveredOthers;
+        const int64_t paths = photons.pathsFor[c];
+        share[c] = paths <= 0 || covered >= uint64_t(paths) ? 1.0 : double(covered) / double(paths);
+    }
+}
+
+// The photon ray --photon asks for, as traced (before its coverage); an error when the pass
+// has fewer.
+PhotonRay replayedRay(const RenderContext& c, const PhotonMap& photons) {
+    if (c.cfg.replayIndex >= int64_t(photons.rays.size()))
+        throw Error(ErrorKind::Config, "`photon` " + std::to_string(c.cfg.replayPass) + ":" + std::to_string(c.cfg.replayIndex) +
+                                           ": pass " + std::to_string(c.cfg.replayPass) + " has " +
+                                           std::to_string(photons.rays.size()) + " photon rays");
+    return photons.rays[size_t(c.cfg.replayIndex)];
+}
+
+// One line: the replayed ray's class, ends, flux, kernel and the coverage its flux was divided by.
+void reportReplayed(const RenderContext& c, const PhotonRay& traced, const PhotonRay& ray, float voxel) {
+    const Vec3 hit = ray.origin + ray.length * ray.dir;
+    const float divided = luminance(ray.flux) > 0.f ? luminance(traced.flux) / luminance(ray.flux) : 0.f;
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "photon ray %lld of pass %d: %s, from (%.4g, %.4g, %.4g) to (%.4g, %.4g, %.4g), flux (%.4g, %.4g, %.4g) W, "
+                  "radius %.4g m (%.3g voxels), reach %.3g radii, flux divided by coverage %.3g",
+                  (long long)c.cfg.replayIndex, c.cfg.replayPass, photonClassName(ray.cls), ray.origin.x, ray.origin.y,
+                  ray.origin.z, hit.x, hit.y, hit.z, ray.flux.x, ray.flux.y, ray.flux.z, ray.radius,
+                  ray.radius / voxel, ray.reach, divided);
+    c.reporter.info(buf);
+}
+
+// Photons [first, last) of `photons`, in path order.
+PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
+    PhotonMap out = photons;
+    out.rays.assign(photons.rays.begin() + first, photons.rays.begin() + last);
+    return out;
+}
+
+// The scale at which the first pass keeps its probed quarter's light, for the scale m chosen.
+float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
+
+// The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a quarter of
+// its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
+// each; the halves are summed at rank 0, which chooses the scale m and tells the others. The
+// pass's own indirect light is then the quarter's, at whichever of 1 and ½ is nearer m, and the
+// other three quarters' at m (until the deadline, where there is one).
+class KernelScaleProbeStep {
+public:
+    KernelScaleProbeStep(const RenderContext& c, const PassTargets& targets, const EyePass& eye, const SplatSettings& splat,
+                         SplatTotals& totals)
+        : c_(c), targets_(targets), eye_(eye), splat_(splat), totals_(totals), values_(size_t(c.width) * c.height * 3) {}
+
+    // `indirect`: the pass's indirect photons before their coverage; `other`: seconds of the
+    // pass apart from their splat; `whole`: runs since the passes began. Adds their light to
+    // `sum` and returns the scale chosen; `covered`: the paths whose indirect photons it splatted.
+    float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
+              const std::function<bool()>& timeUp, uint64_t& covered) {
+        const size_t quarter = indirect.rays.size() / KernelScaleProbe::kShare;
+        std::vector<int64_t> halves(4 * values_);  // A, B, C, D: the indirect layer of each
+        std::vector<int64_t> mine[2];              // this rank's light of the quarter at 1 and at ½
+        FixedFilm part;  // the splat's layers only
+        part.width = c_.width, part.height = c_.height;
+        for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
+        double seconds[2];  // the quarter's splat at 1 and at ½
+        for (int f = 0; f < 2; ++f) {
+            Timer t;
+            const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps);
+            mine[f].assign(values_, 0);
+            for (int h = 0; h < 2; ++h) {
+                splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f == 0);
+                std::copy(part.buffers[kIndirect].begin(), part.buffers[kIndirect].end(), halves.begin() + (2 * f + h) * values_);
+                for (size_t i = 0; i < values_; ++i) mine[f][i] += part.buffers[kIndirect][i];
+            }
+            seconds[f] = t.seconds();
+        }
+        c_.ranks.sumAtRoot(halves);
+        double scale = c_.ranks.rank() == 0 ? choose(halves, seconds, whole, other) : 1.0;
+        c_.ranks.broadcast(&scale, 1);
+        const float m = float(scale);
+        std::vector<int64_t>& light = sum.buffers[kIndirect];
+        const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
+        for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
+        for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
+        covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
+                                 splat_, part, &totals_.splat, &totals_.coverage, timeUp);
+        sum.add(part);
+        return m;
+    }
+    // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
+    // and half its splat at the scale chosen).
+    double nextSeconds() const { return nextSeconds_; }
+
+    // Ray `index` of the first pass's photons (path order, before coverage) as that pass
+    // splatted it under the probe, the scale m chosen: in its part (the other classes, the
+    // probed quarter of the indirect ones or the rest), at that part's scale.
+    static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
+                                const PhotonSettings& ps) {
+        PhotonMap part = traced;
+        part.rays.clear();
+        const bool indirect = traced.rays[index].cls == kPhotonIndirect;
+        size_t at = 0;
+        for (size_t i = 0; i < traced.rays.size(); ++i) {
+            if ((traced.rays[i].cls == kPhotonIndirect) != indirect) continue;
+            if (i == index) at = part.rays.size();
+            part.rays.push_back(traced.rays[i]);
+        }
+        if (indirect) {
+            const size_t quarter = part.rays.size() / KernelScaleProbe::kShare;
+            const bool probed = at < quarter;
+            part = scaledKernels(c.scene, probed ? slice(part, 0, quarter) : slice(part, quarter, part.rays.size()),
+                                 kPhotonIndirect, probed ? keptProbeScale(m) : m, ps);
+            at -= probed ? 0 : quarter;
+        }
+        return part.rays[at];
+    }
+
+private:
+    static constexpr int kProbeLayers = kCaustic + 1;  // the layers a splat writes: direct, indirect, caustic
+
+    // At rank 0: the scale m of least expected error, from the four halves.
+    double choose(const std::vector<int64_t>& halves, const double seconds[2], const Timer& whole, double other) {
+        std::vector<float> light(values_);
+        for (size_t i = 0; i < values_; ++i) {
+            const int ch = int(i % 3);
+            light[i] = eye_.film.layers[kEmission][i / 3][ch] + eye_.film.layers[kDirect][i / 3][ch] +
+                       float(double(halves[i] + halves[values_ + i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
+        }
+        const KernelScaleProbe probe =
+            probeKernelScale(&halves[0], &halves[values_], &halves[2 * values_], &halves[3 * values_], light, FixedFilm::kScale);
+        KernelScalePlan plan;
+        plan.passes = c_.cfg.renderPassCount();
+        plan.alpha = c_.cfg.alpha;
+        if (c_.cfg.timeLimit > 0.0) {  // the user asked for time: the passes are counted by it
+            plan.timed = true;
+            plan.secondsLeft = c_.cfg.timeLimit - whole.seconds();
+            plan.passOther = other;
+            // a + b·h² for the quarter, from its two splats (b: the part that grows with the
+            // kernel's area), then for all the indirect photons.
+            const double b = std::max(0.0, seconds[0] - seconds[1]) * 4.0 / 3.0, a = std::max(0.0, seconds[0] - b);
+            plan.splatFixed = a * KernelScaleProbe::kShare;
+            plan.splatScaled = b * KernelScaleProbe::kShare;
+            plan.passesPerRound = c_.ranks.size();
+        }
+        const float scale = chooseKernelScale(probe, plan);
+        if (plan.timed) nextSeconds_ = plan.passOther + 0.5 * splatSeconds(plan, scale);
+        const double least = expectedKernelError(probe, plan, scale);
+        c_.stats.setCount("kernel_probe_gain", least > 0.0 ? expectedKernelError(probe, plan, 1.f) / least : 1.0);
+        c_.stats.setCount("kernel_probe_noise", probe.noise);
+        c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
+        c_.stats.setCount("kernel_probe_bias", probe.bias());
+        return scale;
+    }
+    void splatInto(const PhotonMap& photons, FixedFilm& part, bool counted) const {
+        for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
+        targets_.splat(photons, splat_, part, counted ? &totals_.splat : nullptr, counted ? &totals_.coverage : nullptr);
+    }
+
+    const RenderContext& c_;
+    const PassTargets& targets_;
+    const EyePass& eye_;
+    const SplatSettings& splat_;
+    SplatTotals& totals_;
+    const size_t values_;
+    double nextSeconds_ = 0.0;
+};
+
+}  // namespace
+
+SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs)
+    : c_(c), eye_(eyePassSettings(c)), coverage_(coverageSettings(c.cfg)), splat_(splatSettings(c.cfg)),
+      probing_(c.cfg.probesKernelScale()), sparse_(c.cfg.sparseReceivers()),
+      measuresCoverage_(c.cfg.visibilityByRays() && c.cfg.coverageProbes > 0) {
+    // The occlusion grid, once (docs/design.md §5–6), where the mask needs it or its file was asked
+    // for. Otherwise the tree indexes the eye samples over an empty grid of the same geometry:
+    // nothing occludes in it, and the receiver rules alone decide (--visibility rays), or nothing
+    // does (splat-novis).
+    const bool mask = c.cfg.needsMask();
+    grid_ = mask || !c.cfg.vdb.empty() || !c.cfg.cacheDir.empty()
+                ? buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, c.stats, outputs)
+                : OcclusionGrid(gridForBounds(c.scene.bounds, c.cfg.grid));
+    if (!mask) grid_ = OcclusionGrid(grid_.geometry);
+    photons_ = photonSettings(c.cfg, grid_.geometry.voxelSize);
+    // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
+    // photons that reach an eye sample (docs/design.md §8).
+    splat_.coverage = measuresCoverage_ ? &coverage_ : nullptr;
+}
+
+// The eye samples of pass `pass` (the next S of each pixel's sequence) and its direct film.
+EyePass SplatPasses::traceEye(int pass) {
+    Timer t;
+    eye_.firstSample = pass * eye_.spp;
+    eye_.firstDirectSample = pass * eye_.directSpp;
+    EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
+    c_.stats.addTime("eye", t.seconds());
+    c_.stats.setCount("eye_samples", double(eye.samples.size()));
+    c_.stats.setCount("eye_samples_mb", double(eye.samples.bytes()) / kMB);
+    return eye;
+}
+
+// The indirect photons' receivers' spacing in pass `pass` (0: none): a share of the smallest
+// indirect kernel the pass can splat (the first pass probes with half-wide ones).
+float SplatPasses::receiverSpacing(int pass) const {
+    if (!sparse_) return 0.f;
+    const float scale = probing_ && pass == 0 ? 0.5f : photons_.classScale[kPhotonIndirect];
+    return c_.cfg.receiverSpacing * photons_.minRadius[kPhotonIndirect] * grid_.geometry.voxelSize *
+           passRadiusScale(pass, c_.cfg.alpha) * scale;
+}
+
+// New photons (a fresh range of paths) with the pass's shrunk kernels; the probe's pass traces
+// its indirect kernels at scale 1 and scales its parts itself.
+PhotonMap SplatPasses::tracePhotonsOf(int pass, PhotonSettings& passSettings) {
+    Timer t;
+    photons_.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
+    photons_.radiusScale = passRadiusScale(pass, c_.cfg.alpha);
+    passSettings = photons_;
+    if (probing_ && pass == 0) passSettings.classScale[kPhotonIndirect] = 1.f;
+    PhotonMap photons = tracePhotons(c_.scene, c_.accel, c_.lights, passSettings, c_.pool, c_.reporter);
+    c_.stats.addTime("photons", t.seconds());
+    photons.report(c_.stats);
+    totals_.photonsStored += int64_t(photons.rays.size());
+    totals_.photonMb = std::max(totals_.photonMb, double(photons.bytes()) / kMB);
+    return photons;
+}
+
+double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadline& deadline) {
+    Timer t;
+    const int pass = share.pass;
+    EyePass eye = traceEye(pass);
+    Timer trees;
+    OcclusionTreeStats ts;
+    PassTargets targets(c_.accel, grid_, eye.samples, c_.width, c_.height, receiverSpacing(pass), c_.pool, c_.reporter,
+                        c_.ranks, &ts);
+    c_.stats.addTime("tree", trees.seconds());
+    c_.stats.setCount("receivers", double(targets.receivers()));
+    ts.report(c_.stats);
+    if (pass == 0 && ts.samplesOutside > 0)
+        c_.reporter.warn(c_.scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
+    PhotonSettings passSettings;
+    PhotonMap photons = tracePhotonsOf(pass, passSettings);
+    if (replaying_) replayRay(photons, passSettings);
+    else if (share.share == 0) sum.add(eye.film);  // the eye pass's own light: emission, albedo, normal, direct
+    const double before = t.seconds();
+    return before + splatPass(pass, share, targets, eye, std::move(photons), passSettings, sum, deadline);
+}
+
+// The photons' light (this rank's share of them) into `sum`, until the deadline; the probe's pass
+// splats its indirect photons apart, at the scales it measures. Returns half the seconds a
+// whole splat takes.
+double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
+                              const PhotonSettings& passSettings, FixedFilm& sum, const Deadline& deadline) {
+    Timer t;
+    coverage_.pass = uint64_t(pass);
+    splat_.share = share.share;
+    splat_.shares = share.shares;
+    // In a pass the ranks share, rank 0's clock decides for all of them after each portion.
+    const std::function<bool()> timeUp = !deadline.clock ? std::function<bool()>()
+                                          : share.shares > 1 ? std::function<bool()>([&] {
+                                                const Ranks::Agreement a = c_.ranks.agree(true, deadline.passed());
+                                                if (a.failedRank >= 0) throw Error(ErrorKind::OtherRank, "rank " + std::to_string(a.failedRank) + " failed");
+                                                return a.more;
+                                            })
+                                                             : std::function<bool()>([&] { return deadline.passed(); });
+    const bool probe = probing_ && pass == 0 && !replaying_;
+    PhotonMap indirect;
+    if (probe) {
+        auto begin = std::stable_partition(photons.rays.begin(), photons.rays.end(),
+                                           [](const PhotonRay& r) { return r.cls != kPhotonIndirect; });
+        indirect.rays.assign(begin, photons.rays.end());
+        photons.rays.erase(begin, photons.rays.end());
+    }
+    const uint64_t coveredOthers = targets.splat(photons, splat_, sum, &totals_.splat, &totals_.coverage, timeUp);
+    uint64_t coveredIndirect = coveredOthers;
+    if (probe) {
+        KernelScaleProbeStep step(c_, targets, eye, splat_, totals_);
+        const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), timeUp, coveredIndirect);
+        nextPass_ = step.nextSeconds();
+        photons_.classScale[kPhotonIndirect] = m;
+        char line[160];
+        std::snprintf(line, sizeof line, "indirect kernels at scale %.3g, from the bias and noise the first pass measured", m);
+        c_.reporter.info(line);
+    }
+    double shares[3];
+    classShares(photons, coveredOthers, coveredIndirect, shares);
+    if (!replaying_ && share.share == 0) sum.countPhotonPass(shares);  // a shared pass counts once
+    const double seconds = t.seconds();
+    c_.stats.addTime("splat", seconds);
+    report();
+    return 0.5 * seconds / std::max(shares[kPhotonIndirect], 0.05);
+}
+
+// --photon: the replayed ray alone, as the full render splats it, and its record reported.
+void SplatPasses::replayRay(PhotonMap& photons, const PhotonSettings& passSettings) {
+    const PhotonRay traced = replayedRay(c_, photons);
+    const PhotonRay ray = probing_ && c_.cfg.replayPass == 0
+                              ? KernelScaleProbeStep::asSplatted(c_, photons, size_t(c_.cfg.replayIndex),
+                                                                 photons_.classScale[kPhotonIndirect], passSettings)
+                              : traced;
+    photons.rays.assign(1, ray);
+    PhotonRay covered = ray;  // as the splat will cover it
+    CoverageStats unused;
+    coverage_.pass = uint64_t(c_.cfg.replayPass);
+    if (measuresCoverage_) normalizeCoverage(c_.accel, covered, coverage_, unused);
+    reportReplayed(c_, traced, covered, grid_.geometry.voxelSize);
+}
+
+void SplatPasses::replay(FixedFilm& sum) {
+    if (probing_) {  // the scale, as the render's first pass chooses it
+        FixedFilm unused(c_.width, c_.height);
+        render(PassShare{0, 0, 1}, unused, Deadline{});
+        totals_ = SplatTotals();
+    }
+    replaying_ = true;
+    render(PassShare{c_.cfg.replayPass, 0, 1}, sum, Deadline{});
+    c_.reporter.info("photon ray " + std::to_string(c_.cfg.replayIndex) + " reached " +
+                     std::to_string(int64_t(c_.stats.count("splat_contributions"))) + " eye samples");
+}
+
+void SplatPasses::report() {
+    Stats& stats = c_.stats;
+    stats.setCount("photon_mb", totals_.photonMb);
+    stats.setCount("photons_stored", double(totals_.photonsStored));
+    stats.setCount("radius_scale", photons_.radiusScale);
+    stats.setCount("kernel_scale", photons_.classScale[kPhotonIndirect]);
+    totals_.splat.report(stats);
+    if (measuresCoverage_) totals_.coverage.report(stats);
+}
+
+}  // namespace rs
