@@ -63,6 +63,11 @@ SplatSettings splatSettings(const RenderConfig& cfg) {
     return splat;
 }
 
+// Under a time limit a pass is started when its steps before the splat and this share of its
+// splat fit: a pass cut short still adds a whole direct film, and its photons count by their
+// share (FixedFilm::photonPasses).
+constexpr double kWorthStarting = 0.1;
+
 // The share of each photon class's light that a splat of the pass's paths [0, covered) gives.
 void classShares(const PhotonMap& photons, uint64_t coveredOthers, uint64_t coveredIndirect, double share[3]) {
     for (int c = 0; c < kPhotonClassCount; ++c) {
@@ -209,7 +214,7 @@ private:
             plan.passesPerRound = c_.ranks.size();
         }
         const float scale = chooseKernelScale(probe, plan);
-        if (plan.timed) nextSeconds_ = plan.passOther + 0.5 * splatSeconds(plan, scale);
+        if (plan.timed) nextSeconds_ = plan.passOther + kWorthStarting * splatSeconds(plan, scale);
         const double least = expectedKernelError(probe, plan, scale);
         c_.stats.setCount("kernel_probe_gain", least > 0.0 ? expectedKernelError(probe, plan, 1.f) / least : 1.0);
         c_.stats.setCount("kernel_probe_noise", probe.noise);
@@ -352,7 +357,7 @@ double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& tar
     const double seconds = t.seconds();
     c_.stats.addTime("splat", seconds);
     report();
-    return 0.5 * seconds / std::max(shares[kPhotonIndirect], 0.05);
+    return kWorthStarting * seconds / std::max(shares[kPhotonIndirect], 0.05);
 }
 
 // --photon: the replayed ray alone, as the full render splats it, and its record reported.

@@ -35,7 +35,7 @@ public:
     // Pass `share.pass`, this rank's share of it, into `sum`: the eye pass's own light, then the
     // photons', until `deadline` where there is one (sum.photonPasses counts the share of each
     // class's photons splatted). Returns the seconds a later pass needs to be worth starting: its
-    // steps before the splat and half a whole splat.
+    // steps before the splat and a tenth of a whole splat.
     double render(const PassShare& share, FixedFilm& sum, const Deadline& deadline);
     // --photon PASS:INDEX: that ray's light alone into `sum`, after the first pass where that pass
     // chooses the kernel scale (docs/design.md §9).
