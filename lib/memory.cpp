@@ -28,8 +28,10 @@ constexpr double kFilmBytesPerPixel = 6 * 3 * 8 + 6 * 12 + 3 * 8;
 // KernelScaleProbeStep): four half-images and the two kept (RGB, 8 bytes) and a splat's film
 // of three layers.
 constexpr double kProbeBytesPerPixel = (4 + 2 + 3) * 3 * 8;
-// Per pixel and thread: the splat's fixed-point accumulators (three layers × RGB × 8 bytes).
-constexpr double kSplatBytesPerPixelThread = 3 * 3 * 8;
+// Per pixel, thread and photon class splatted onto the eye samples: the splat's fixed-point
+// accumulators (RGB × 8 bytes). With sparse receivers the indirect photons land on the receivers
+// instead (irradiance.h), whose buffers are a small fraction of these.
+constexpr double kSplatBytesPerPixelThreadClass = 3 * 8;
 // Per triangle: the scene's vertex data and Embree's BVH (high quality, robust).
 constexpr double kBvhBytesPerTriangle = 3 * (12 + 12 + 8) + 160;
 // The process before any of it: libraries, the EGL context (llvmpipe's is the largest), the
@@ -69,7 +71,8 @@ MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t
         // About one node a brick of 4³ voxels: a bound on the tree's nodes and brick payloads.
         m.tree = voxels / double(kBrickSize * kBrickSize * kBrickSize) * sizeof(Node);
         m.photons = double(cfg.photons) * sizeof(PhotonRay) * 1.5;  // the map grows by doubling
-        m.splat = pixels * kSplatBytesPerPixelThread * std::max(threads, 1);
+        const int classes = (cfg.directBySampling() ? 0 : 1) + (cfg.sparseReceivers() ? 0 : 1) + 1;  // + caustic
+        m.splat = pixels * kSplatBytesPerPixelThreadClass * classes * std::max(threads, 1);
     }
     return m;
 }

@@ -2,7 +2,7 @@
 """raysplat against Mitsuba 3's path tracer at equal wall time, on one scene.
 
   python3 scripts/equal_time.py SCENE --width W [--height H] --time-limit T
-                                [--runs N] [--reference A.exr B.exr | --reference-spp N]
+                                [--runs N] [--reference EXR ... | --reference-spp N]
                                 [--out out/equal_time] [--no-mitsuba] [-- RAYSPLAT_ARGS...]
 
 Each run renders SCENE with `raysplat render --time-limit T` (the default method, or what
@@ -88,7 +88,8 @@ def main():
     ap.add_argument("--height", type=int, default=0, help="0: from the camera's aspect")
     ap.add_argument("--time-limit", type=float, required=True)
     ap.add_argument("--runs", type=int, default=1)
-    ap.add_argument("--reference", nargs=2, metavar="EXR", help="two path-traced halves")
+    ap.add_argument("--reference", nargs="+", metavar="EXR",
+                    help="path-traced renders of independent seeds, an even number (their two halves estimate the noise)")
     ap.add_argument("--reference-spp", type=int, default=2048)
     ap.add_argument("--build", default=os.path.join(studyutil.ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(studyutil.ROOT, "out", "equal_time"))
@@ -101,7 +102,11 @@ def main():
     os.makedirs(outdir, exist_ok=True)
 
     if args.reference:
-        halves = [images.read_layers(p) for p in args.reference]
+        if len(args.reference) % 2:
+            sys.exit("error: --reference takes an even number of renders")
+        renders = [images.read_layers(p) for p in args.reference]
+        k = len(renders) // 2
+        halves = [{n: sum(r[n] for r in part) / k for n in part[0]} for part in (renders[:k], renders[k:])]
     else:
         size = [args.width, args.height]
         if not size[1]:

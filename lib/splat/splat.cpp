@@ -440,17 +440,34 @@ struct ReachedSamples {
     }
 };
 
-// Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
-void addThreadBuffers(const std::vector<std::vector<int64_t>>& acc, FixedFilm& film) {
-    for (const std::vector<int64_t>& buf : acc) {
-        if (buf.empty()) continue;
-        for (int l = 0; l < kSplatLayers; ++l) {
-            const int64_t* from = &buf[size_t(l) * film.pixelCount() * 3];
-            std::vector<int64_t>& to = film.buffers[l];
-            for (size_t i = 0; i < to.size(); ++i) FixedFilm::addSaturating(to[i], from[i]);
+// Per thread, a fixed-point buffer of pixel × RGB for each photon class the map holds (a pass's
+// caustic photons alone take no room for the other two), summed into the film's layers.
+struct ThreadLayers {
+    int slot[kSplatLayers] = {-1, -1, -1};  // class → its buffer in a thread's, −1: none
+    int count = 0;
+    size_t values = 0;  // a buffer's: pixels × 3
+
+    ThreadLayers(const PhotonMap& photons, size_t pixels) : values(pixels * 3) {
+        for (const PhotonRay& r : photons.rays)
+            if (slot[r.cls] < 0) slot[r.cls] = count++;
+    }
+    int64_t* layer(std::vector<int64_t>& buf, int cls) const {
+        if (buf.empty()) buf.assign(size_t(count) * values, 0);
+        return &buf[size_t(slot[cls]) * values];
+    }
+    // Sums the threads' buffers (integers: any order gives the same sum) into the film's layers.
+    void addTo(const std::vector<std::vector<int64_t>>& acc, FixedFilm& film) const {
+        for (const std::vector<int64_t>& buf : acc) {
+            if (buf.empty()) continue;
+            for (int l = 0; l < kSplatLayers; ++l) {
+                if (slot[l] < 0) continue;
+                const int64_t* from = &buf[size_t(slot[l]) * values];
+                std::vector<int64_t>& to = film.buffers[l];
+                for (size_t i = 0; i < to.size(); ++i) FixedFilm::addSaturating(to[i], from[i]);
+            }
         }
     }
-}
+};
 
 }  // namespace
 
@@ -459,7 +476,8 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                   Reporter& reporter, SplatStats* statsOut, CoverageStats* coverageOut) {
     const size_t pixels = film.pixelCount();
     const int threads = pool.size();
-    std::vector<std::vector<int64_t>> acc(threads);  // per thread: layer × pixel × rgb
+    const ThreadLayers layers(photons, pixels);
+    std::vector<std::vector<int64_t>> acc(threads);  // per thread: its classes' layers, pixel × rgb
     std::vector<TraversalScratch> scratch(threads);
     std::vector<SplatStats> stats(threads);
     const std::vector<uint32_t> order = coherentOrder(photons, tree.geometry);
@@ -471,11 +489,9 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
     std::vector<CoverageStats> coverage(threads);
     reporter.begin("splatting", last - first, "photons");
     pool.parallelFor(last - first, SplatSettings::kChunk, [&](int64_t b, int64_t e, int thread) {
-        std::vector<int64_t>& buf = acc[thread];
-        if (buf.empty()) buf.assign(size_t(kSplatLayers) * pixels * 3, 0);
         for (int64_t p = first + b; p < first + e; ++p) {
             PhotonRay ray = photons.rays[order[size_t(p)]];
-            int64_t* layer = &buf[size_t(ray.cls) * pixels * 3];
+            int64_t* layer = layers.layer(acc[thread], ray.cls);
             const Cylinder cylinder = cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow);
             if (settings.coverage) {
                 // The samples first, then the coverage where one of them may take light, then the
@@ -506,7 +522,7 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
         reporter.advance(e - b);
     });
     reporter.end();
-    addThreadBuffers(acc, film);
+    layers.addTo(acc, film);
     if (statsOut)
         for (const SplatStats& s : stats) statsOut->add(s);
     if (coverageOut)
