@@ -230,7 +230,7 @@ void addPhotonOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) 
     cmd.add({"--kernel-scale", "S",
              "scale of the indirect photons' kernels (after --min-radius/--max-radius): auto (default: with --method splat, "
              "--direct sample and more than one pass or a time limit, the first pass measures the kernels' blur and noise "
-             "and chooses it in 0.25..1, reported as kernel_scale; else 1) or a number in 0.05..4",
+             "and chooses it in 0.25..1.46, reported as kernel_scale; else 1) or a number in 0.05..4",
              [&](const std::string& v) { cfg.kernelScale = v == "auto" ? 0.f : parseFloat("--kernel-scale", v); }});
     cmd.add({"--alpha", "A", "kernel shrinkage between passes, r^2 *= (i + A)/(i + 1) (default " + numberText(d.splat.alpha) + ")",
              [&](const std::string& v) { cfg.alpha = parseFloat("--alpha", v); }});

@@ -192,7 +192,9 @@ TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
     EXPECT_LT(chooseKernelScale(p, timed), chooseKernelScale(p, eight));
 }
 
-// No bias measured, or too little to pay (E(1) < 1.25 E(m)): the kernels stay as they are.
+// No bias measured: the kernels stay as they are. A bias measured small and a noise that falls
+// with wider kernels: wider ones, up to kMaxKernelScale. A bias whose optimum is near 1 (E(1) <
+// 1.25 E(m)): scale 1.
 TEST(KernelScale, KeepsScaleOneWithoutAClearGain) {
     KernelScalePlan plan;
     plan.passes = 8;
@@ -202,6 +204,8 @@ TEST(KernelScale, KeepsScaleOneWithoutAClearGain) {
     p.biasChange = -0.5;  // the bias estimate's noise
     EXPECT_EQ(chooseKernelScale(p, plan), 1.f);
     p.biasChange = 0.01;
+    EXPECT_NEAR(chooseKernelScale(p, plan), kMaxKernelScale, 1e-5f);
+    p.biasChange = 0.2;  // optimum a little above 1, short of a clear gain
+    EXPECT_LT(expectedKernelError(p, plan, 1.f), kMinKernelGain * expectedKernelError(p, plan, 1.1f));
     EXPECT_EQ(chooseKernelScale(p, plan), 1.f);
-    EXPECT_LT(expectedKernelError(p, plan, 1.f), kMinKernelGain * expectedKernelError(p, plan, 0.9f));
 }
