@@ -37,15 +37,14 @@ Ranks& singleProcess() {
     return one;
 }
 
-namespace {
-
-// Every rank's figures agree, or this throws: another rank failed and says why.
 bool agreeOrStop(Ranks& ranks, bool more) {
     const Ranks::Agreement a = ranks.agree(true, more);
     if (a.failedRank >= 0)
         throw Error(ErrorKind::OtherRank, "rank " + std::to_string(a.failedRank) + " failed");
     return a.more;
 }
+
+namespace {
 
 PathSettings pathSettings(const RenderContext& c) {
     PathSettings ps;

@@ -36,4 +36,8 @@ struct PassShare {
     int share = 0, shares = 1;
 };
 
+// Every rank agrees at this point (render.cpp): returns rank 0's `more`, or throws where another
+// rank failed (it says why).
+bool agreeOrStop(Ranks& ranks, bool more);
+
 }  // namespace rs

@@ -324,14 +324,7 @@ double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& tar
     coverage_.pass = uint64_t(pass);
     splat_.share = share.share;
     splat_.shares = share.shares;
-    // In a pass the ranks share, rank 0's clock decides for all of them after each portion.
-    const std::function<bool()> timeUp = !deadline.clock ? std::function<bool()>()
-                                          : share.shares > 1 ? std::function<bool()>([&] {
-                                                const Ranks::Agreement a = c_.ranks.agree(true, deadline.passed());
-                                                if (a.failedRank >= 0) throw Error(ErrorKind::OtherRank, "rank " + std::to_string(a.failedRank) + " failed");
-                                                return a.more;
-                                            })
-                                                             : std::function<bool()>([&] { return deadline.passed(); });
+    const std::function<bool()> timeUp = timeUpFor(share, deadline);
     const bool probe = probing_ && pass == 0 && !replaying_;
     PhotonMap indirect;
     if (probe) {
@@ -358,6 +351,14 @@ double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& tar
     c_.stats.addTime("splat", seconds);
     report();
     return kWorthStarting * seconds / std::max(shares[kPhotonIndirect], 0.05);
+}
+
+// Whether the deadline has passed, asked after each portion of a splat (none without a time
+// limit). In a pass the ranks share, rank 0's clock decides for all of them.
+std::function<bool()> SplatPasses::timeUpFor(const PassShare& share, const Deadline& deadline) const {
+    if (!deadline.clock) return nullptr;
+    if (share.shares == 1) return [deadline] { return deadline.passed(); };
+    return [this, deadline] { return agreeOrStop(c_.ranks, deadline.passed()); };
 }
 
 // --photon: the replayed ray alone, as the full render splats it, and its record reported.

@@ -4,6 +4,7 @@
 // and until when; this file what one pass does, in order.
 #pragma once
 
+#include <functional>
 #include <memory>
 
 #include "core/staged_files.h"
@@ -51,6 +52,7 @@ private:
     PhotonMap tracePhotonsOf(int pass, PhotonSettings& passSettings);
     double splatPass(int pass, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
                      const PhotonSettings& passSettings, FixedFilm& sum, const Deadline& deadline);
+    std::function<bool()> timeUpFor(const PassShare& share, const Deadline& deadline) const;
     void replayRay(PhotonMap& photons, const PhotonSettings& passSettings);
     void report();
 
