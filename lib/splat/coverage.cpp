@@ -51,6 +51,7 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
         const Vec3 u = ray.radius * std::sqrt(s) * (std::cos(phi) * frame.s + std::sin(phi) * frame.t);
         float start = cosOrigin > 1e-3f ? std::max(0.f, -glm::dot(u, n) / cosOrigin) : 0.f;
         start += offset / std::max(cosOrigin, 0.05f);
+        start = std::max(start, begin);  // what lies before the window counts for nothing
         if (!(start < end)) continue;
         from[live] = ray.origin + u + start * ray.dir;
         depth[live] = start;

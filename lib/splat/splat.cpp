@@ -146,13 +146,17 @@ namespace {
 
 // One photon ray's cylinder (voxel space): it reaches past the hit as far as the kernel lands;
 // with visibility it leaves out the samples behind the origin's tangent plane (rule 1).
+// With a receiver window that begins past x(i−1), the cylinder begins there too: its walk skips
+// the part of a long ray that no sample may receive from, and rule 1, whose plane runs through
+// x(i−1), is left to the receive step (there are no occluders to keep in front of it).
 Cylinder cylinderOf(const PhotonRay& ray, const GridGeometry& g, bool visibility, bool windowed) {
+    const float begin = ray.kernelBegin(windowed);
     Cylinder cyl;
-    cyl.origin = g.voxelFromWorld(ray.origin);
+    cyl.origin = g.voxelFromWorld(ray.origin + begin * ray.dir);
     cyl.dir = ray.dir;
     cyl.radius = ray.radius / g.voxelSize;
-    cyl.length = ray.kernelEnd(windowed) / g.voxelSize;
-    cyl.originNormal = ray.originNormal && visibility ? decodeUnit(ray.originNormal) : Vec3(0.f);
+    cyl.length = (ray.kernelEnd(windowed) - begin) / g.voxelSize;
+    cyl.originNormal = ray.originNormal && visibility && begin == 0.f ? decodeUnit(ray.originNormal) : Vec3(0.f);
     return cyl;
 }
 
