@@ -115,7 +115,7 @@ def machine():
                                 text=True).stdout.strip()
     except OSError:
         commit = ""
-    return {"cpu": cpu, "threads": os.cpu_count(), "date": time.strftime("%Y-%m-%d"),
+    return {"cpu": cpu, "threads": len(os.sched_getaffinity(0)), "date": time.strftime("%Y-%m-%d"),
             "os": platform.platform(terse=True), "commit": commit or "unknown"}
 
 
