@@ -131,8 +131,8 @@ Film renderPath(const RenderContext& c) {
 
 // Photon ray splatting: the grid once, then the passes (splat_pass.h); the first pass alone, on
 // every rank a share, where it measures the kernel scale for the others.
-Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
-    SplatPasses passes(c, outputs);
+Film renderSplat(const RenderContext& c, StagedFiles* outputs, PhotonStore* store) {
+    SplatPasses passes(c, outputs, store);
     if (c.cfg.replays()) {
         FixedFilm sum(c.width, c.height);
         passes.replay(sum);
@@ -145,7 +145,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs) {
 
 }  // namespace
 
-RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks) {
+RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, PhotonStore* store) {
     cfg.validate();
     RenderResult result;
     Stats& stats = result.stats;
@@ -181,7 +181,7 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
 
     const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats, ranks};
     if (cfg.splats()) {
-        result.film = renderSplat(context, result.outputs.get());
+        result.film = renderSplat(context, result.outputs.get(), store);
     } else {
         // The path tracer does not need the grid; it is built only when asked for.
         if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg.gridSettings(), pool, reporter, stats, result.outputs.get());
@@ -192,8 +192,10 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     result.attributes["scene"] = scene.path;
     result.attributes["version"] = versionString();
     result.attributes["simd"] = isaName(traversalIsa());
-    if (cfg.splats() && cfg.probesKernelScale() && !cfg.replays())
+    if (cfg.splats() && cfg.probesKernelScale() && !cfg.replays() && !store)
         result.attributes["kernelScale"] = "auto: " + std::to_string(stats.count("kernel_scale"));
+    else if (cfg.splats() && store && cfg.kernelScale <= 0.f)
+        result.attributes["kernelScale"] = "1";  // stored photons are not probed
     if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(stats.count("samples_per_pixel")));
     for (const auto& [stage, s] : stats.seconds) {
         char b[32];

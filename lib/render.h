@@ -22,9 +22,13 @@ struct RenderResult {
     std::shared_ptr<StagedFiles> outputs = std::make_shared<StagedFiles>();
 };
 
+struct PhotonStore;  // splat_pass.h
+
 // With several ranks (an MPI job, lib/ranks.h) every rank calls it alike; rank 0's result holds
-// the image, the others' film is empty.
-RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks = singleProcess());
+// the image, the others' film is empty. With a photon store (the frames of a walkthrough whose
+// scene does not move, docs/design.md §12) the splat's photons come from it and are kept in it.
+RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks = singleProcess(),
+                    PhotonStore* store = nullptr);
 
 // EXR (+ PNG, + stats JSON) as the config asks, each written atomically.
 void writeOutputs(RenderResult& result, const RenderConfig& cfg);

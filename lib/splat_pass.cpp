@@ -238,9 +238,9 @@ private:
 
 }  // namespace
 
-SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs)
-    : c_(c), eye_(eyePassSettings(c)), coverage_(coverageSettings(c.cfg)), splat_(splatSettings(c.cfg)),
-      probing_(c.cfg.probesKernelScale()), sparse_(c.cfg.sparseReceivers()),
+SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonStore* store)
+    : c_(c), store_(store), eye_(eyePassSettings(c)), coverage_(coverageSettings(c.cfg)), splat_(splatSettings(c.cfg)),
+      probing_(c.cfg.probesKernelScale() && !store), sparse_(c.cfg.sparseReceivers()),
       measuresCoverage_(c.cfg.visibilityByRays() && c.cfg.coverageProbes > 0) {
     // The occlusion grid, once (docs/design.md §5–6), where the mask needs it or its file was asked
     // for. Otherwise the tree indexes the eye samples over an empty grid of the same geometry:
@@ -253,8 +253,8 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs)
     if (!mask) grid_ = OcclusionGrid(grid_.geometry);
     photons_ = photonSettings(c.cfg, grid_.geometry.voxelSize);
     // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
-    // photons that reach an eye sample (docs/design.md §8).
-    splat_.coverage = measuresCoverage_ ? &coverage_ : nullptr;
+    // photons that reach an eye sample (docs/design.md §8); stored photons have theirs already.
+    splat_.coverage = measuresCoverage_ && !store ? &coverage_ : nullptr;
 }
 
 // The eye samples of pass `pass` (the next S of each pixel's sequence) and its direct film.
@@ -294,6 +294,31 @@ PhotonMap SplatPasses::tracePhotonsOf(int pass, PhotonSettings& passSettings) {
     return photons;
 }
 
+// The pass's photons from the store, traced (with every kernel's coverage) when it has none yet.
+// The coverage of a kernel is a function of the ray alone (seed, pass, ray), so measuring it
+// for every photon here gives each frame the light the splat's own measurement would.
+PhotonMap SplatPasses::storedPhotonsOf(int pass, PhotonSettings& passSettings) {
+    auto it = store_->passes.find(pass);
+    if (it == store_->passes.end()) {
+        PhotonMap photons = tracePhotonsOf(pass, passSettings);
+        if (measuresCoverage_) {
+            Timer t;
+            coverage_.pass = uint64_t(pass);
+            normalizeKernelCoverage(c_.accel, photons, coverage_, c_.pool, c_.reporter, &totals_.coverage);
+            c_.stats.addTime("coverage", t.seconds());
+        }
+        ++store_->traced;
+        it = store_->passes.emplace(pass, std::move(photons)).first;
+    } else {  // the settings tracePhotonsOf gave them
+        photons_.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
+        photons_.radiusScale = passRadiusScale(pass, c_.cfg.alpha);
+        passSettings = photons_;
+    }
+    c_.stats.setCount("photon_passes_traced", double(store_->traced));
+    c_.stats.setCount("photon_store_mb", store_->bytes() / kMB);
+    return it->second;
+}
+
 double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadline& deadline) {
     Timer t;
     const int pass = share.pass;
@@ -308,7 +333,7 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
     if (pass == 0 && ts.samplesOutside > 0)
         c_.reporter.warn(c_.scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
     PhotonSettings passSettings;
-    PhotonMap photons = tracePhotonsOf(pass, passSettings);
+    PhotonMap photons = store_ ? storedPhotonsOf(pass, passSettings) : tracePhotonsOf(pass, passSettings);
     if (replaying_) replayRay(photons, passSettings);
     else if (share.share == 0) sum.add(eye.film);  // the eye pass's own light: emission, albedo, normal, direct
     const double before = t.seconds();

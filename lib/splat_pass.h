@@ -5,6 +5,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 
 #include "core/staged_files.h"
@@ -20,6 +21,20 @@ namespace rs {
 
 class PassTargets;
 
+// The photons of a walkthrough's passes, kept across its frames (docs/design.md §12): a pass's
+// photons are traced once, with every kernel's coverage measured, and splatted into each frame
+// that renders that pass. They depend on the scene and the settings, not on the camera, so a
+// frame's image is the same whether its photons were traced for it or for a frame before it.
+struct PhotonStore {
+    std::map<int, PhotonMap> passes;  // by pass
+    int64_t traced = 0;               // passes traced (the rest of the frames' passes reused them)
+    double bytes() const {
+        double b = 0.0;
+        for (const auto& [pass, photons] : passes) b += double(photons.bytes());
+        return b;
+    }
+};
+
 // Figures summed over a render's passes (the last pass's sizes are reported as they come).
 struct SplatTotals {
     SplatStats splat;
@@ -30,8 +45,10 @@ struct SplatTotals {
 
 class SplatPasses {
 public:
-    // Builds the occlusion grid (or its empty twin) once, and every stage's settings.
-    SplatPasses(const RenderContext& c, StagedFiles* outputs);
+    // Builds the occlusion grid (or its empty twin) once, and every stage's settings. With a
+    // store, photons come from it (and are added to it): the kernel scale is not probed then,
+    // since a probe would tie the photons to the frame that measured it.
+    SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonStore* store = nullptr);
 
     // Pass `share.pass`, this rank's share of it, into `sum`: the eye pass's own light, then the
     // photons', until `deadline` where there is one (sum.photonPasses counts the share of each
@@ -50,6 +67,7 @@ private:
     EyePass traceEye(int pass);
     float receiverSpacing(int pass) const;
     PhotonMap tracePhotonsOf(int pass, PhotonSettings& passSettings);
+    PhotonMap storedPhotonsOf(int pass, PhotonSettings& passSettings);
     double splatPass(int pass, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
                      const PhotonSettings& passSettings, FixedFilm& sum, const Deadline& deadline);
     std::function<bool()> timeUpFor(const PassShare& share, const Deadline& deadline) const;
@@ -57,6 +75,7 @@ private:
     void report();
 
     const RenderContext& c_;
+    PhotonStore* store_;
     OcclusionGrid grid_;
     EyePassSettings eye_;
     PhotonSettings photons_;

@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "splat/photons.h"
 #include "render.h"
+#include "splat_pass.h"
 #include "splat/kernel_scale.h"
 #include "splat/splat.h"
 #include "splat/targets.h"
@@ -471,4 +472,38 @@ TEST(TimeLimit, APassCutShortKeepsAnUnbiasedShareOfItsPhotons) {
     const double ratio = layerMean(cut.film, kIndirect) / layerMean(whole.film, kIndirect);
     RecordProperty("indirect_mean_ratio", std::to_string(ratio));
     EXPECT_NEAR(ratio, 1.0, 0.04);
+}
+
+// A walkthrough's photon store (docs/design.md §12): photons traced for one camera and splatted
+// into another's frame give that frame bit for bit the image its own render gives, with the
+// coverage measured for every photon where the splat measures it only for those it needs; the
+// second frame traces no photons.
+TEST(PhotonStore, FramesShareThePhotonsAndKeepTheirImages) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene first = loadScene(std::string(data) + "/interior.gltf", silentReporter());
+    RenderConfig cfg = splatConfig(40);
+    cfg.photons = 20000;
+    cfg.passes = 2;
+    cfg.kernelScale = 1.f;  // a store's photons are not probed: the same scale without one
+    Scene second = first;
+    Camera& cam = second.cameras.at(0);
+    cam.position += 0.3f * cam.right + 0.1f * cam.forward;
+    auto same = [](const RenderResult& a, const RenderResult& b) {
+        for (int l = 0; l < kLayerCount; ++l)
+            if (a.film.layers[l] != b.film.layers[l]) return false;
+        return true;
+    };
+    PhotonStore store;
+    const RenderResult a = render(first, cfg, silentReporter(), singleProcess(), &store);
+    EXPECT_EQ(store.traced, 2);
+    EXPECT_TRUE(same(a, render(first, cfg, silentReporter()))) << "coverage measured for all photons or as needed";
+    const RenderResult b = render(second, cfg, silentReporter(), singleProcess(), &store);
+    EXPECT_EQ(store.traced, 2) << "the second frame reuses both passes";
+    EXPECT_EQ(b.stats.count("photon_passes_traced"), 2.0);
+    EXPECT_GT(b.stats.count("splat_contributions"), 0.0);
+    EXPECT_TRUE(same(b, render(second, cfg, silentReporter()))) << "frame b alone";
+    PhotonStore fresh;
+    EXPECT_TRUE(same(b, render(second, cfg, silentReporter(), singleProcess(), &fresh))) << "frame b first";
+    EXPECT_FALSE(same(a, b)) << "the camera moved";
 }
