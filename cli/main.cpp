@@ -89,7 +89,7 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
     std::unique_ptr<Reporter> console = cli::makeReporter(args.quiet, args.json);
     Reporter& reporter = root ? *console : silentReporter();
     Timer load;
-    Scene scene = loadScene(cfg.scene, reporter);
+    Scene scene = loadScene(cfg.scene, reporter, cfg.threads);
     double loadSeconds = load.seconds();
     RenderResult result = render(scene, cfg, reporter, ranks);
     result.stats.seconds.insert(result.stats.seconds.begin(), {"load", loadSeconds});
@@ -162,7 +162,7 @@ int cmdVoxelize(int argc, char** argv) {
     const RenderConfig& cfg = args.cfg;
     std::unique_ptr<Reporter> console = cli::makeReporter(args.quiet, args.json);
     Reporter& reporter = *console;
-    Scene scene = loadScene(cfg.scene, reporter);
+    Scene scene = loadScene(cfg.scene, reporter, cfg.threads);
     const IVec3 dims = gridForBounds(scene.bounds, cfg.grid).dims;
     const int gridDims[3] = {dims.x, dims.y, dims.z};
     MemoryEstimate memory;

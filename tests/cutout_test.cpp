@@ -22,12 +22,10 @@ Scene cardOverFloor(AlphaMode mode, bool checker) {
     s.path = "card over a floor";
     const uint32_t floor = addMaterial(s, MaterialKind::Lambert, Vec3(0.6f));
     const uint32_t card = addMaterial(s, MaterialKind::Lambert, Vec3(0.3f));
-    Texture t;
-    t.width = t.height = 4;
-    t.texels.assign(16, Vec3(1.f));
+    std::vector<uint8_t> rgba(4 * 16, 255);
     for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) t.alpha.push_back(checker ? float((x + y + 1) % 2) : 1.f);
-    s.textures.push_back(t);
+        for (int x = 0; x < 4; ++x) rgba[size_t(4 * (4 * y + x) + 3)] = checker ? uint8_t(255 * ((x + y + 1) % 2)) : 255;
+    s.textures.push_back(Texture("card", 4, 4, rgba.data(), true, true));
     s.materials[card].baseColorTexture = 0;
     s.materials[card].alphaMode = mode;
     s.materials[card].opacity = checker ? 1.f : 0.5f;

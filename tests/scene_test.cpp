@@ -699,9 +699,10 @@ TEST(Loader, AlphaModesAndTextureAlpha) {
     writeFile(dir.file("alpha.tga"), tga);
     Scene s = loadScene(g.write(dir, "alpha"), silentReporter());
     ASSERT_EQ(s.textures.size(), 1u);
-    ASSERT_EQ(s.textures[0].alpha.size(), 2u);
-    EXPECT_EQ(s.textures[0].alpha[0], 1.f);
-    EXPECT_EQ(s.textures[0].alpha[1], 0.f);
+    ASSERT_TRUE(s.textures[0].hasAlpha());
+    ASSERT_EQ(s.textures[0].width() * s.textures[0].height(), 2);
+    EXPECT_EQ(s.textures[0].alphaAt(0), 1.f);
+    EXPECT_EQ(s.textures[0].alphaAt(1), 0.f);
     const Material& m = s.materials[size_t(leaf)];
     EXPECT_EQ(m.alphaMode, AlphaMode::Mask);
     EXPECT_FLOAT_EQ(m.alphaCutoff, 0.3f);

@@ -140,18 +140,15 @@ TEST_P(Voxelizer, AxisAlignedQuadFillsItsVoxelsOnOneSide) {
 }
 
 // A cut-out material (alphaMode MASK or BLEND) with a base colour texture of w × h texels whose
-// alpha is alpha(x, y); material 1 of the scene.
+// alpha is alpha(x, y) (8 bits); material 1 of the scene.
 uint32_t addCutout(Scene& s, AlphaMode mode, int w, int h, const std::function<float(int, int)>& alpha) {
     const uint32_t m = test::addMaterial(s, MaterialKind::Lambert, Vec3(0.5f));
-    Texture t;
-    t.width = w;
-    t.height = h;
-    t.texels.assign(size_t(w) * h, Vec3(1.f));
+    std::vector<uint8_t> rgba(4 * size_t(w) * size_t(h), 255);
     for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) t.alpha.push_back(alpha(x, y));
+        for (int x = 0; x < w; ++x) rgba[4 * (size_t(y) * size_t(w) + size_t(x)) + 3] = uint8_t(std::lround(255.f * alpha(x, y)));
     s.materials[m].baseColorTexture = int(s.textures.size());
     s.materials[m].alphaMode = mode;
-    s.textures.push_back(t);
+    s.textures.push_back(Texture("cutout", w, h, rgba.data(), true, true));
     return m;
 }
 
@@ -178,7 +175,7 @@ TEST_P(Voxelizer, CutoutCoversItsSolidTexelsOnly) {
             ASSERT_EQ(count(g, x, y, 3, kPosZ), solid ? 16 : 0) << "voxel " << x << "," << y;
         }
     s.materials[m].alphaMode = AlphaMode::Blend;
-    s.textures[0].alpha.assign(4, 0.3f);
+    s.textures[0] = Texture("cutout", 2, 2, std::vector<uint8_t>(16, uint8_t(std::lround(0.3f * 255.f))).data(), true, true);
     g = voxelize(GetParam(), s, unitGrid(IVec3(8)));
     int covered = 0;
     for (int y = 0; y < 8; ++y)

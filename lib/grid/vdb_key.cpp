@@ -87,8 +87,9 @@ std::string cacheKey(const Scene& scene, int resolution, VoxelizerKind kind) {
             h.add(bitsOf(m.opacity) | bitsOf(m.alphaCutoff) << 32);
             if (m.baseColorTexture < 0) continue;
             const Texture& tex = scene.textures[size_t(m.baseColorTexture)];
-            h.add(uint64_t(uint32_t(tex.width)) << 32 | uint64_t(uint32_t(tex.height)));
-            for (float a : tex.alpha) h.add(bitsOf(a));
+            h.add(uint64_t(uint32_t(tex.width())) << 32 | uint64_t(uint32_t(tex.height())));
+            if (!tex.hasAlpha()) continue;
+            for (int i = 0; i < tex.width() * tex.height(); ++i) h.add(bitsOf(tex.alphaAt(i)));
         }
         for (size_t t = 0; t < scene.triangleCount(); ++t) {
             if (scene.materials[scene.triMaterial[t]].alphaMode == AlphaMode::Opaque) continue;

@@ -38,12 +38,12 @@ namespace {
 std::vector<uint32_t> cutoutLevels(const Scene& scene, uint32_t m, int& width, int& height) {
     const Material& mat = scene.materials[m];
     const Texture* tex = mat.baseColorTexture >= 0 ? &scene.textures[size_t(mat.baseColorTexture)] : nullptr;
-    if (tex && tex->alpha.empty()) tex = nullptr;
-    width = tex ? tex->width : 1;
-    height = tex ? tex->height : 1;
+    if (tex && !tex->hasAlpha()) tex = nullptr;
+    width = tex ? tex->width() : 1;
+    height = tex ? tex->height() : 1;
     std::vector<uint32_t> levels(size_t(width) * height);
     for (size_t i = 0; i < levels.size(); ++i) {
-        const float alpha = mat.opacity * (tex ? tex->alpha[i] : 1.f);
+        const float alpha = mat.opacity * (tex ? tex->alphaAt(int(i)) : 1.f);
         levels[i] = mat.alphaMode == AlphaMode::Mask ? (alpha >= mat.alphaCutoff ? 255u : 0u)
                                                      : uint32_t(std::lround(std::clamp(alpha, 0.f, 1.f) * 255.f));
     }

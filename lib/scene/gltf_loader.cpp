@@ -46,6 +46,7 @@ Scene GltfLoader::loadAll() {
     checkExtensions();
     scene_.path = path_;
     loadMaterials();
+    decodeImages();
     loadLights();
 
     // Flatten the node hierarchy of the default scene into world space.
@@ -99,6 +100,7 @@ void GltfLoader::readFile() {
     if (!std::filesystem::exists(path_, ec)) fail("no such file", ErrorKind::Io);
     if (std::filesystem::is_directory(path_, ec)) fail("is a directory, not a glTF file", ErrorKind::Io);
     tinygltf::TinyGLTF gltf;
+    gltf.SetImageLoader(&GltfLoader::keepEncodedImage, nullptr);
     std::string err, warn;
     std::string ext = std::filesystem::path(path_).extension().string();
     for (char& c : ext) c = char(std::tolower(c));

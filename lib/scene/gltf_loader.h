@@ -1,6 +1,7 @@
-// The glTF loader (docs/design.md §3): one class whose parts live in three files —
+// The glTF loader (docs/design.md §3): one class whose parts live in four files —
 // gltf_loader.cpp (the file, the node hierarchy, cameras), gltf_materials.cpp (materials,
-// textures, KHR_lights_punctual) and gltf_meshes.cpp (accessors, meshes). Internal to
+// textures, KHR_lights_punctual), gltf_images.cpp (decoding the images, in parallel, once the
+// materials said which textures they need) and gltf_meshes.cpp (accessors, meshes). Internal to
 // lib/scene/: only these files include tinygltf (Debian's compiled library: no
 // TINYGLTF_IMPLEMENTATION here). Every error names the file and the glTF object it was found
 // in; nothing is dropped silently: non-triangle primitives are skipped with a warning.
@@ -27,7 +28,9 @@ inline std::string quoted(const std::string& kind, int index, const std::string&
 
 class GltfLoader {
 public:
-    GltfLoader(const std::string& path, Reporter& reporter) : path_(path), reporter_(reporter) {}
+    // threads: for decoding images (0: one per hardware thread).
+    GltfLoader(const std::string& path, Reporter& reporter, int threads = 0)
+        : path_(path), reporter_(reporter), threads_(threads) {}
     Scene load();
 
 private:
@@ -52,8 +55,20 @@ private:
     static bool isPortal(const tinygltf::Node& node);
     // -- Materials, textures, KHR_lights_punctual (gltf_materials.cpp)
     void loadMaterials();
-    int loadTexture(int textureIndex, const std::string& where);
+    // The Scene::textures index of glTF texture `textureIndex`, one per (image, srgb): colour
+    // textures (base colour, emission) are sRGB, data textures (normals, metallic-roughness)
+    // linear. Only reserves the slot: decodeImages fills it.
+    int loadTexture(int textureIndex, const std::string& where, bool srgb = true);
     void loadLights();
+    // -- Images (gltf_images.cpp)
+    // tinygltf's image callback: keeps a file's encoded bytes (or nothing, for an image in a
+    // bufferView) instead of decoding them while the JSON is parsed, one image after another.
+    static bool keepEncodedImage(tinygltf::Image* image, int index, std::string* err, std::string* warn,
+                                 int width, int height, const unsigned char* bytes, int size, void* user);
+    // Decodes every image a texture uses, in parallel, into Scene::textures, freeing each
+    // encoded copy once its textures are built.
+    void decodeImages();
+    void decodeImage(int image, int srgbTexture, int linearTexture);
     // -- Accessors and meshes (gltf_meshes.cpp)
     // Reads accessor `index` as `n` floats per element (normalized integers become [0,1]),
     // checking every byte it touches lies inside its buffer.
@@ -67,11 +82,12 @@ private:
 
     std::string path_;
     Reporter& reporter_;
+    int threads_ = 0;
     tinygltf::Model model_;
     Scene scene_;
     uint32_t defaultMaterial_ = 0;
     std::vector<PunctualLight> lightTemplates_;
-    std::map<int, int> textureOfImage_;
+    std::map<std::pair<int, bool>, int> textureOfImage_;  // (image, srgb) → Scene::textures index
     std::map<std::string, int> repeated_;  // warnings by kind
     std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
 };

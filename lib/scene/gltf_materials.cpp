@@ -8,10 +8,6 @@ namespace rs::gltf {
 
 namespace {
 
-float srgbToLinear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
-
 double extNumber(const tinygltf::ExtensionMap& ext, const char* extension, const char* key,
                  double fallback) {
     auto it = ext.find(extension);
@@ -71,44 +67,19 @@ void GltfLoader::loadMaterials() {
     scene_.materials.push_back(fallback);
 }
 
-int GltfLoader::loadTexture(int textureIndex, const std::string& where) {
-    if (textureIndex >= int(model_.textures.size()))
+int GltfLoader::loadTexture(int textureIndex, const std::string& where, bool srgb) {
+    if (textureIndex < 0 || textureIndex >= int(model_.textures.size()))
         fail(where + ": texture " + std::to_string(textureIndex) + " does not exist");
     int source = model_.textures[textureIndex].source;
     if (source < 0 || source >= int(model_.images.size()))
         fail(quoted("texture", textureIndex, model_.textures[textureIndex].name) + " has no valid image source");
-    auto cached = textureOfImage_.find(source);
+    auto cached = textureOfImage_.find({source, srgb});
     if (cached != textureOfImage_.end()) return cached->second;
-
     const tinygltf::Image& img = model_.images[source];
-    std::string iwhere = quoted("image", source, img.name.empty() ? img.uri : img.name);
-    if (img.width <= 0 || img.height <= 0 || img.image.empty()) fail(iwhere + " has zero size");
-    int bytesPer = img.bits / 8;
-    if ((img.bits != 8 && img.bits != 16) || img.component < 1 || img.component > 4 ||
-        img.image.size() < size_t(img.width) * img.height * img.component * bytesPer)
-        fail(iwhere + " has an unsupported pixel format");
-    Texture tex;
-    tex.name = iwhere;
-    tex.width = img.width;
-    tex.height = img.height;
-    tex.texels.resize(size_t(img.width) * img.height);
-    const bool hasAlpha = img.component == 2 || img.component == 4;
-    if (hasAlpha) tex.alpha.resize(tex.texels.size());
-    float maxValue = img.bits == 8 ? 255.f : 65535.f;
-    for (size_t p = 0; p < tex.texels.size(); ++p) {
-        float ch[4];
-        for (int c = 0; c < img.component; ++c) {
-            size_t at = (p * img.component + c) * bytesPer;
-            unsigned v = bytesPer == 1 ? img.image[at] : unsigned(img.image[at] | (img.image[at + 1] << 8));
-            ch[c] = float(v) / maxValue;
-        }
-        Vec3 rgb = img.component >= 3 ? Vec3(ch[0], ch[1], ch[2]) : Vec3(ch[0]);
-        tex.texels[p] = Vec3(srgbToLinear(rgb.x), srgbToLinear(rgb.y), srgbToLinear(rgb.z));
-        if (hasAlpha) tex.alpha[p] = ch[img.component - 1];  // alpha is linear
-    }
-    int index = int(scene_.textures.size());
-    scene_.textures.push_back(std::move(tex));
-    textureOfImage_[source] = index;
+    const int index = int(scene_.textures.size());
+    scene_.textures.emplace_back();
+    scene_.textures.back().name = quoted("image", source, img.name.empty() ? img.uri : img.name);
+    textureOfImage_[{source, srgb}] = index;
     return index;
 }
 

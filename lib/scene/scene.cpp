@@ -20,29 +20,11 @@ const char* materialKindName(MaterialKind kind) {
     return "?";
 }
 
-Scene loadScene(const std::string& path, Reporter& reporter) { return gltf::GltfLoader(path, reporter).load(); }
+Scene loadScene(const std::string& path, Reporter& reporter, int threads) {
+    return gltf::GltfLoader(path, reporter, threads).load();
+}
 
 // -- Scene queries ---------------------------------------------------------------------------
-
-Vec3 Texture::sample(Vec2 uv) const {
-    float x = (uv.x - std::floor(uv.x)) * width - 0.5f;
-    float y = (uv.y - std::floor(uv.y)) * height - 0.5f;
-    int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-    float fx = x - x0, fy = y - y0;
-    auto at = [&](int i, int j) {
-        i = ((i % width) + width) % width;
-        j = ((j % height) + height) % height;
-        return texels[size_t(j) * width + i];
-    };
-    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
-           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
-}
-
-int Texture::texelAt(Vec2 uv) const {
-    const float fx = uv.x - std::floor(uv.x), fy = uv.y - std::floor(uv.y);
-    const int x = std::min(int(fx * float(width)), width - 1), y = std::min(int(fy * float(height)), height - 1);
-    return y * width + x;
-}
 
 Vec3 PunctualLight::intensityTowards(const Vec3& w) const {
     if (type != LightType::Spot) return intensity;
@@ -63,17 +45,25 @@ float Scene::triangleArea(size_t tri) const {
     return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
 }
 
-Vec3 Scene::albedo(uint32_t material, Vec2 uv) const {
+Vec3 Scene::albedo(uint32_t material, Vec2 uv, float uvFootprint) const {
     const Material& m = materials[material];
     if (m.baseColorTexture < 0) return m.baseColor;
-    return m.baseColor * textures[m.baseColorTexture].sample(uv);
+    const Texture& t = textures[size_t(m.baseColorTexture)];
+    return m.baseColor * Vec3(t.sample(uv, t.lodOf(uvFootprint)));
+}
+
+float Scene::uvPerWorld(size_t tri) const {
+    const Vec2* uv = &uvs[3 * tri];
+    const Vec2 a = uv[1] - uv[0], b = uv[2] - uv[0];
+    const float uvArea = 0.5f * std::abs(a.x * b.y - a.y * b.x), area = triangleArea(tri);
+    return area > 0.f ? std::sqrt(uvArea / area) : 0.f;
 }
 
 float Scene::alphaAt(uint32_t material, Vec2 uv) const {
     const Material& m = materials[material];
     if (m.baseColorTexture < 0) return m.opacity;
-    const Texture& t = textures[m.baseColorTexture];
-    return t.alpha.empty() ? m.opacity : m.opacity * t.alpha[size_t(t.texelAt(uv))];
+    const Texture& t = textures[size_t(m.baseColorTexture)];
+    return t.hasAlpha() ? m.opacity * t.alphaAt(t.texelAt(uv)) : m.opacity;
 }
 
 bool Scene::hasCutouts() const {

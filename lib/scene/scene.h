@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "scene/texture.h"
 
 namespace rs {
 
@@ -35,18 +36,6 @@ struct Material {
     bool isEmissive() const { return !isBlack(emission); }
     bool isSpecular() const { return kind == MaterialKind::Glass || kind == MaterialKind::Mirror; }
     float alpha() const { return std::max(roughness * roughness, 1e-3f); }  // GGX α
-};
-
-struct Texture {
-    std::string name;
-    int width = 0, height = 0;
-    std::vector<Vec3> texels;  // linear RGB (sRGB decoded), row 0 at v = 0
-    std::vector<float> alpha;  // per texel, linear; empty: the image has no alpha
-
-    Vec3 sample(Vec2 uv) const;  // bilinear, repeat
-    // The texel holding uv (repeat): the alpha test reads texels, not a filtered value, so that
-    // both voxelizers and the ray tracer cut a surface along the same texel edges.
-    int texelAt(Vec2 uv) const;
 };
 
 enum class LightType { Point, Spot, Directional };
@@ -114,9 +103,13 @@ struct Scene {
     size_t triangleCount() const { return triMaterial.size(); }
     Vec3 geometricNormal(size_t tri) const;  // unit, from the counter-clockwise winding
     float triangleArea(size_t tri) const;
-    // Base colour at a surface point: factor × texture.
-    Vec3 albedo(uint32_t material, Vec2 uv) const;
-    // Alpha at a surface point: factor × the texel's alpha.
+    // Base colour at a surface point: factor × texture, filtered over a footprint `uvFootprint`
+    // wide in uv units (SurfacePoint::uvFootprint; 0: bilinear in the full-size image).
+    Vec3 albedo(uint32_t material, Vec2 uv, float uvFootprint = 0.f) const;
+    // uv units per world unit on triangle tri: the square root of its uv area over its area
+    // (0 where the uvs are degenerate). A footprint w wide on the surface is w × this in uv.
+    float uvPerWorld(size_t tri) const;
+    // Alpha at a surface point: factor × the level-0 texel's alpha.
     float alphaAt(uint32_t material, Vec2 uv) const;
     // Whether any material cuts its surface (alphaMode MASK or BLEND).
     bool hasCutouts() const;
@@ -132,7 +125,8 @@ struct Scene {
     void computeBounds();
 };
 
-// Loads a .gltf or .glb file. Throws Error(Scene/Io) naming the file and glTF object.
-Scene loadScene(const std::string& path, class Reporter& reporter);
+// Loads a .gltf or .glb file, decoding its images on `threads` threads (0: one per hardware
+// thread). Throws Error(Scene/Io) naming the file and glTF object.
+Scene loadScene(const std::string& path, class Reporter& reporter, int threads = 0);
 
 }  // namespace rs
