@@ -82,23 +82,43 @@ constexpr int kPoints = 0, kTriangles = 4, kStrip = 5, kFan = 6;
 // Builds a small glTF document: one binary buffer, and the JSON objects that refer to it.
 class GltfBuilder {
 public:
-    // Appends `bytes` as a new bufferView and an accessor over it; returns the accessor index.
-    int accessor(const std::string& bytes, int componentType, int count, const char* type) {
+    // Appends `bytes` as a new bufferView; returns its index.
+    int view(const std::string& bytes) {
         while (bin_.size() % 4) bin_.push_back('\0');
         size_t offset = bin_.size();
         bin_ += bytes;
         views_.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) +
                          ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
-        accessors_.push_back("{\"bufferView\":" + std::to_string(views_.size() - 1) +
-                             ",\"componentType\":" + std::to_string(componentType) +
+        return int(views_.size()) - 1;
+    }
+    // Appends `bytes` as a new bufferView and an accessor over it; returns the accessor index.
+    int accessor(const std::string& bytes, int componentType, int count, const char* type) {
+        const int v = view(bytes);
+        accessors_.push_back("{\"bufferView\":" + std::to_string(v) + ",\"componentType\":" + std::to_string(componentType) +
                              ",\"count\":" + std::to_string(count) + ",\"type\":\"" + type + "\"}");
         return int(accessors_.size()) - 1;
     }
-    int positions(const std::vector<Vec3>& p) {
+    // An accessor without a bufferView: zeros, until a sparse substitution.
+    int zeros(int componentType, int count, const char* type) {
+        accessors_.push_back("{\"componentType\":" + std::to_string(componentType) + ",\"count\":" + std::to_string(count) +
+                             ",\"type\":\"" + type + "\"}");
+        return int(accessors_.size()) - 1;
+    }
+    // Makes accessor `a` sparse: the `count` elements `indices` (of componentType `indexType`)
+    // become `values` (of the accessor's own component type).
+    void sparse(int a, int count, const std::string& indices, int indexType, const std::string& values) {
+        const int iv = view(indices), vv = view(values);
+        std::string& s = accessors_[size_t(a)];
+        s.pop_back();
+        s += ",\"sparse\":{\"count\":" + std::to_string(count) + ",\"indices\":{\"bufferView\":" + std::to_string(iv) +
+             ",\"componentType\":" + std::to_string(indexType) + "},\"values\":{\"bufferView\":" + std::to_string(vv) + "}}}";
+    }
+    static std::string floats(const std::vector<Vec3>& p) {
         std::vector<float> flat;
         for (const Vec3& v : p) flat.insert(flat.end(), {v.x, v.y, v.z});
-        return accessor(bytesOf(flat), kFloat, int(p.size()), "VEC3");
+        return bytesOf(flat);
     }
+    int positions(const std::vector<Vec3>& p) { return accessor(floats(p), kFloat, int(p.size()), "VEC3"); }
     int normals(const std::vector<Vec3>& n) { return positions(n); }
     int indices32(const std::vector<uint32_t>& i) { return accessor(bytesOf(i), kUInt, int(i.size()), "SCALAR"); }
 
@@ -738,4 +758,93 @@ TEST(Loader, EmptyTextureImageIsOneErrorNamingTheImage) {
         EXPECT_EQ(what.find('\n'), std::string::npos) << what;
     }
     EXPECT_TRUE(reporter.warnings.empty()) << reporter.warnings.front();
+}
+
+// -- Sparse accessors ---------------------------------------------------------------------------
+
+namespace {
+
+// A quad (0, 1, 2, 0, 2, 3) and a triangle, both emissive. Sparse: the quad's POSITION holds
+// 9s at vertices 1 and 3 that uint16 sparse indices replace; its uint32 indices are zeros that
+// uint8 sparse indices replace at 1, 2, 4, 5; the triangle's POSITION has no bufferView (zeros)
+// and all three vertices come from uint32 sparse indices. Dense: the same, written out.
+std::string quadAndTriangle(const TempDir& dir, bool sparse) {
+    const std::vector<Vec3> quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, tri = {{2, 0, -1}, {3, 0, -1}, {2, 1, -1}};
+    GltfBuilder g;
+    const int glow = g.material("{\"emissiveFactor\":[1,0.5,0.25]}");
+    std::vector<Vec3> base = quad;
+    if (sparse) base[1] = base[3] = Vec3(9.f);
+    const int p = g.positions(base);
+    const int i = g.indices32(sparse ? std::vector<uint32_t>(6, 0) : std::vector<uint32_t>{0, 1, 2, 0, 2, 3});
+    const int t = sparse ? g.zeros(kFloat, 3, "VEC3") : g.positions(tri);
+    if (sparse) {
+        g.sparse(p, 2, bytesOf(std::vector<uint16_t>{1, 3}), kUShort, GltfBuilder::floats({quad[1], quad[3]}));
+        g.sparse(i, 4, std::string("\x01\x02\x04\x05", 4), kUByte, bytesOf(std::vector<uint32_t>{1, 2, 2, 3}));
+        g.sparse(t, 3, bytesOf(std::vector<uint32_t>{0, 1, 2}), kUInt, GltfBuilder::floats(tri));
+    }
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(p, i, kTriangles, glow),
+                                                 GltfBuilder::primitive(t, -1, kTriangles, glow)})));
+    return g.write(dir, sparse ? "sparse" : "dense");
+}
+
+}  // namespace
+
+// The sparse file gives the hand-written triangles, and it loads and renders (path tracer,
+// framing camera) to the bit as the file with the substitutions written out densely.
+TEST(Loader, SparseAccessorsMatchTheirDenseEquivalent) {
+    TempDir dir;
+    const Scene sparse = loadScene(quadAndTriangle(dir, true), silentReporter());
+    const Scene dense = loadScene(quadAndTriangle(dir, false), silentReporter());
+    EXPECT_TRUE(trianglesAre(sparse, {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}},
+                                      {{2, 0, -1}, {3, 0, -1}, {2, 1, -1}}}));
+    ASSERT_EQ(sparse.positions.size(), dense.positions.size());
+    EXPECT_EQ(0, std::memcmp(sparse.positions.data(), dense.positions.data(), dense.positions.size() * sizeof(Vec3)));
+    EXPECT_EQ(0, std::memcmp(sparse.normals.data(), dense.normals.data(), dense.normals.size() * sizeof(Vec3)));
+
+    RenderConfig cfg;
+    cfg.output = "unused.exr";
+    cfg.method = Method::Path;
+    cfg.width = cfg.height = 16;
+    cfg.spp = 2;
+    const RenderResult a = render(sparse, cfg, silentReporter()), b = render(dense, cfg, silentReporter());
+    EXPECT_GT(rs::test::layerMean(a.film, kEmission), 0.0);
+    for (int l = 0; l < kLayerCount; ++l)
+        EXPECT_EQ(0, std::memcmp(a.film.layers[l].data(), b.film.layers[l].data(), a.film.pixelCount() * sizeof(Vec3)))
+            << layerName(l);
+}
+
+// Bad sparse accessors are one Error naming the file and the accessor: an index past the base
+// accessor's count, values that run past their bufferView, more substitutions than elements.
+TEST(Loader, BadSparseAccessorsAreErrorsNamingTheAccessor) {
+    const std::vector<Vec3> tri = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    struct Case {
+        const char* name;
+        int count;
+        std::vector<uint16_t> indices;
+        std::vector<Vec3> values;
+        const char* says;
+    };
+    for (const Case& c : {Case{"index_past", 1, {3}, {Vec3(1.f)}, "index 3 is past its 3 elements"},
+                          Case{"short_values", 2, {0, 1}, {Vec3(1.f)}, "reads past the end"},
+                          Case{"too_many", 4, {0, 1, 2, 2}, {tri[0], tri[1], tri[2], tri[2]}, "substitutes 4 of its 3"}}) {
+        SCOPED_TRACE(c.name);
+        TempDir dir;
+        GltfBuilder g;
+        const int p = g.positions(tri);
+        g.sparse(p, c.count, bytesOf(c.indices), kUShort, GltfBuilder::floats(c.values));
+        g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(p)})));
+        const std::string path = g.write(dir, c.name);
+        RecordingReporter reporter;
+        try {
+            loadScene(path, reporter);
+            ADD_FAILURE() << "expected an Error";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(e.kind(), ErrorKind::Scene);
+            EXPECT_NE(what.find(std::string(c.name) + ".gltf"), std::string::npos) << what;
+            EXPECT_NE(what.find("accessor 0"), std::string::npos) << what;
+            EXPECT_NE(what.find(c.says), std::string::npos) << what;
+        }
+        EXPECT_TRUE(reporter.warnings.empty());
+    }
 }

@@ -77,6 +77,9 @@ private:
     const tinygltf::Accessor& accessor(int index, const std::string& where);
     template <class F>
     void forEachComponent(int index, const std::string& where, F&& f);
+    template <class F>
+    void forEachSparseComponent(int index, const std::string& where, F&& f);
+    const unsigned char* viewBytes(int view, size_t offset, size_t length, const std::string& what);
     void addMesh(int meshIndex, const Mat4& world, const std::string& nodeWhere);
     static std::vector<uint32_t> triangulate(const std::vector<uint32_t>& idx, int mode);
 

@@ -47,9 +47,20 @@ std::vector<uint32_t> GltfLoader::readIndices(int index, const std::string& wher
 const tinygltf::Accessor& GltfLoader::accessor(int index, const std::string& where) {
     if (index < 0 || index >= int(model_.accessors.size()))
         fail(where + ": accessor " + std::to_string(index) + " does not exist");
-    const tinygltf::Accessor& a = model_.accessors[index];
-    if (a.sparse.isSparse) fail(where + ": " + quoted("accessor", index, a.name) + " is sparse, which is not supported");
-    return a;
+    return model_.accessors[index];
+}
+
+// The bytes [offset, offset + length) of bufferView `view`, checked against the view and its
+// buffer.
+const unsigned char* GltfLoader::viewBytes(int view, size_t offset, size_t length, const std::string& what) {
+    if (view < 0 || view >= int(model_.bufferViews.size())) fail(what + " references a missing bufferView");
+    const tinygltf::BufferView& v = model_.bufferViews[view];
+    if (v.buffer < 0 || v.buffer >= int(model_.buffers.size())) fail(what + " references a missing buffer");
+    const std::vector<unsigned char>& data = model_.buffers[v.buffer].data;
+    if (offset > v.byteLength || length > v.byteLength - offset || v.byteOffset > data.size() ||
+        v.byteLength > data.size() - v.byteOffset)
+        fail(what + " reads past the end of its bufferView or buffer");
+    return data.data() + v.byteOffset + offset;
 }
 
 template <class F>
@@ -63,6 +74,7 @@ void GltfLoader::forEachComponent(int index, const std::string& where, F&& f) {
         static const unsigned char zeros[8] = {};
         for (size_t e = 0; e < a.count; ++e)
             for (int c = 0; c < n; ++c) f(e, c, zeros);
+        forEachSparseComponent(index, where, f);
         return;
     }
     if (a.bufferView >= int(model_.bufferViews.size())) fail(awhere + " references a missing bufferView");
@@ -76,6 +88,40 @@ void GltfLoader::forEachComponent(int index, const std::string& where, F&& f) {
         fail(awhere + " reads past the end of its bufferView or buffer");
     for (size_t e = 0; e < a.count; ++e)
         for (int c = 0; c < n; ++c) f(e, c, &data[begin + e * stride + size_t(c) * size]);
+    forEachSparseComponent(index, where, f);
+}
+
+// A sparse accessor (glTF 2.0 §3.6.2.3): after the dense elements (or zeros without a
+// bufferView), element sparse.indices[k] becomes sparse.values[k], each index checked against
+// the accessor's count and every byte against its bufferView.
+template <class F>
+void GltfLoader::forEachSparseComponent(int index, const std::string& where, F&& f) {
+    const tinygltf::Accessor& a = model_.accessors[index];
+    if (!a.sparse.isSparse) return;
+    const std::string awhere = where + ": sparse " + quoted("accessor", index, a.name);
+    const int n = tinygltf::GetNumComponentsInType(a.type), size = tinygltf::GetComponentSizeInBytes(a.componentType);
+    const auto& sp = a.sparse;
+    if (sp.count < 1 || size_t(sp.count) > a.count)
+        fail(awhere + " substitutes " + std::to_string(sp.count) + " of its " + std::to_string(a.count) + " elements");
+    const int indexType = sp.indices.componentType;
+    if (indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        fail(awhere + " has sparse indices that are not unsigned integers");
+    if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0) fail(awhere + " has a negative byteOffset");
+    const size_t count = size_t(sp.count), indexSize = size_t(tinygltf::GetComponentSizeInBytes(indexType));
+    const unsigned char* indices = viewBytes(sp.indices.bufferView, size_t(sp.indices.byteOffset), count * indexSize,
+                                             awhere + "'s indices");
+    const unsigned char* values = viewBytes(sp.values.bufferView, size_t(sp.values.byteOffset), count * size_t(n) * size,
+                                            awhere + "'s values");
+    for (size_t k = 0; k < count; ++k) {
+        uint32_t e = 0;
+        if (indexSize == 1) e = indices[k];
+        else if (indexSize == 2) { uint16_t u; std::memcpy(&u, indices + 2 * k, 2); e = u; }
+        else std::memcpy(&e, indices + 4 * k, 4);
+        if (e >= a.count)
+            fail(awhere + ": index " + std::to_string(e) + " is past its " + std::to_string(a.count) + " elements");
+        for (int c = 0; c < n; ++c) f(size_t(e), c, values + (k * size_t(n) + size_t(c)) * size_t(size));
+    }
 }
 
 void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& nodeWhere) {
