@@ -138,9 +138,17 @@ int cmdInfo(int argc, char** argv) {
     if (!s.portals.empty()) std::printf("portals     %zu triangles (sun and sky photons enter through them)\n", s.portals.size() / 3);
     Vec3 power = s.emittedPower();
     std::printf("power       %.4g W (RGB %.4g, %.4g, %.4g)\n", luminance(power), power.x, power.y, power.z);
-    Camera c = s.camera();
-    std::printf("camera      '%s' at %s looking %s, yfov %.1f deg%s\n", c.name.c_str(), vec(c.position).c_str(),
-                vec(c.forward).c_str(), c.yfov * 180.0 / kPi, s.cameras.empty() ? " (none in the file: framing the bounds)" : "");
+    // Every camera, by the index, name and node that --camera takes; the first is the default.
+    auto describe = [&](const Camera& c) {
+        const std::string view = c.projection == Projection::Orthographic
+                                     ? fmt("orthographic, %.4g m high", 2.0 * c.ymag)
+                                     : fmt("perspective, yfov %.1f deg", c.yfov * 180.0 / kPi);
+        return fmt("'%s'%s, %s, at %s looking %s", c.name.c_str(), c.node.empty() ? "" : fmt(" (node '%s')", c.node.c_str()).c_str(),
+                   view.c_str(), vec(c.position).c_str(), vec(c.forward).c_str());
+    };
+    if (s.cameras.empty()) std::printf("camera      %s (none in the file: framing the bounds)\n", describe(s.camera()).c_str());
+    for (size_t i = 0; i < s.cameras.size(); ++i)
+        std::printf("camera %-4zu %s%s\n", i, describe(s.cameras[i]).c_str(), i == 0 ? " (the default)" : "");
     std::printf("bounds      %s to %s (m)\n", vec(s.bounds.lo).c_str(), vec(s.bounds.hi).c_str());
     checkSimdEnvironment();
     std::printf("simd        %s: the occlusion tree's traversal runs %d lanes wide\n", isaName(traversalIsa()), int(traversalIsa()));

@@ -148,7 +148,8 @@ void addOutputOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) 
              [&](const std::string& v) { cfg.width = parseNumber<int>("--width", v); }});
     cmd.add({"--height", "N", "image height (default: from the width and the camera's aspect ratio)",
              [&](const std::string& v) { cfg.height = parseNumber<int>("--height", v); }});
-    cmd.add({"--camera", "NAME", "the glTF camera to use (default: the first one)", [&](const std::string& v) { cfg.camera = v; }});
+    cmd.add({"--camera", "CAMERA", "the glTF camera to use: its name, its node's name or its index in the list raysplat info prints (default: the first one)",
+             [&](const std::string& v) { cfg.camera = v; }});
     cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(d.splat.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
 }
 

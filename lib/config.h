@@ -51,7 +51,7 @@ struct RenderConfig {
     std::string output;     // .exr
     std::string png;        // optional preview
     std::string statsJson;  // optional
-    std::string camera;     // name; empty = first in the file
+    std::string camera;     // name, node name or index (Scene::camera); empty = first in the file
 
     Method method = Method::Splat;
     int width = 500;   // 0: from height and the camera's aspect

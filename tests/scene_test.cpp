@@ -848,3 +848,131 @@ TEST(Loader, BadSparseAccessorsAreErrorsNamingTheAccessor) {
         EXPECT_TRUE(reporter.warnings.empty());
     }
 }
+
+// -- Cameras ------------------------------------------------------------------------------------
+
+namespace {
+
+// A quad, an unnamed perspective camera on node "Front" and an orthographic camera "top view"
+// (xmag 2, ymag 1) on node "Top", 5 m up and turned −90° about x to look down −y.
+std::string twoCameras(const TempDir& dir, const std::string& orthographic = "\"xmag\":2,\"ymag\":1") {
+    GltfBuilder g;
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}))})));
+    g.node("\"name\":\"Front\",\"camera\":0,\"translation\":[0,0,5]");
+    const float h = std::sqrt(0.5f);
+    g.node("\"name\":\"Top\",\"camera\":1,\"translation\":[0,5,0],\"rotation\":[" + std::to_string(-h) + ",0,0," +
+           std::to_string(h) + "]");
+    g.extra("\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.5,\"znear\":0.1}},"
+            "{\"name\":\"top view\",\"type\":\"orthographic\",\"orthographic\":{" + orthographic + ",\"znear\":0.1,\"zfar\":100}}]");
+    return g.write(dir, "cameras");
+}
+
+}  // namespace
+
+// Both cameras load in node order, with their node's name and projection; --camera's value
+// picks one by the camera's name, its node's name or its index, and anything else is a Config
+// error that lists them.
+TEST(Loader, CamerasByNameNodeNameOrIndex) {
+    TempDir dir;
+    const Scene s = loadScene(twoCameras(dir), silentReporter());
+    ASSERT_EQ(s.cameras.size(), 2u);
+    EXPECT_EQ(s.cameras[0].name, "camera 0");
+    EXPECT_EQ(s.cameras[0].node, "Front");
+    EXPECT_EQ(s.cameras[0].projection, Projection::Perspective);
+    const Camera& top = s.cameras[1];
+    EXPECT_EQ(top.name, "top view");
+    EXPECT_EQ(top.node, "Top");
+    EXPECT_EQ(top.projection, Projection::Orthographic);
+    EXPECT_FLOAT_EQ(top.ymag, 1.f);
+    EXPECT_FLOAT_EQ(top.aspect, 2.f);
+    EXPECT_TRUE(near(top.position, Vec3(0, 5, 0)));
+    EXPECT_TRUE(near(top.forward, Vec3(0, -1, 0)));
+    EXPECT_TRUE(near(top.up, Vec3(0, 0, -1)));
+    for (const char* which : {"top view", "Top", "1"}) {
+        const Camera c = s.camera(which);
+        EXPECT_EQ(c.name, "top view") << which;
+        EXPECT_EQ(c.projection, Projection::Orthographic) << which;
+    }
+    for (const char* which : {"camera 0", "Front", "0", ""}) EXPECT_EQ(s.camera(which).node, "Front") << which;
+    for (const char* which : {"2", "Back", "-1", "01x"}) {
+        try {
+            s.camera(which);
+            ADD_FAILURE() << which << ": expected an Error";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(e.kind(), ErrorKind::Config);
+            EXPECT_NE(what.find(std::string("'") + which + "'"), std::string::npos) << what;
+            EXPECT_NE(what.find("1 'top view' on node 'Top'"), std::string::npos) << what;
+        }
+    }
+}
+
+// An orthographic camera whose xmag or ymag is zero or negative: an Error naming the camera.
+TEST(Loader, OrthographicCameraWithoutExtentIsAnError) {
+    for (const char* extent : {"\"xmag\":0,\"ymag\":1", "\"xmag\":1,\"ymag\":-1"}) {
+        SCOPED_TRACE(extent);
+        TempDir dir;
+        try {
+            loadScene(twoCameras(dir, extent), silentReporter());
+            ADD_FAILURE() << "expected an Error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("camera 1 'top view'"), std::string::npos) << e.what();
+        }
+    }
+}
+
+namespace {
+
+// An emissive square of side 0.5 (x in [0, 0.5], y in [−0.25, 0.25]) at z = −d facing +z, seen
+// by an orthographic camera at the origin looking down −z with xmag 1, ymag 0.5.
+Scene squareBeforeOrthographicCamera(float d) {
+    Scene s;
+    const uint32_t glow = rs::test::addMaterial(s, MaterialKind::Lambert, Vec3(0.5f), Vec3(1.f, 0.5f, 0.25f));
+    rs::test::addQuad(s, {0.f, -0.25f, -d}, {0.5f, -0.25f, -d}, {0.5f, 0.25f, -d}, {0.f, 0.25f, -d}, glow);
+    Camera c;
+    c.projection = Projection::Orthographic;
+    c.ymag = 0.5f;
+    c.aspect = 2.f;
+    s.cameras.push_back(c);
+    s.computeBounds();
+    return s;
+}
+
+}  // namespace
+
+// Parallel rays: the square's image is the same at 1, 4 and 16 m, for the path tracer and the
+// splat renderer, and it covers s / (2·xmag) · width = 0.5 / 2 · 32 = 8 columns (16 to 23) and
+// s / (2·ymag) · height = 8 rows (4 to 11) of the 32 × 16 image (its height from xmag / ymag).
+// A pinhole camera's image would shrink 16-fold over these distances.
+TEST(Camera, OrthographicImageOfASquareIsTheSameAtAnyDistance) {
+    for (Method method : {Method::Path, Method::Splat}) {
+        SCOPED_TRACE(methodName(method));
+        RenderConfig cfg;
+        cfg.output = "unused.exr";
+        cfg.method = method;
+        cfg.width = 32;
+        cfg.height = 0;
+        cfg.photons = 1000;
+        cfg.passes = 1;
+        std::vector<Vec3> first;
+        for (float d : {1.f, 4.f, 16.f}) {
+            SCOPED_TRACE("d = " + std::to_string(d));
+            const RenderResult r = render(squareBeforeOrthographicCamera(d), cfg, silentReporter());
+            ASSERT_EQ(r.film.width, 32);
+            ASSERT_EQ(r.film.height, 16);
+            const std::vector<Vec3> image = r.film.beautyImage();
+            int lit = 0;
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 32; ++x) {
+                    const Vec3 v = image[size_t(y) * 32 + x];
+                    const bool inside = x >= 16 && x < 24 && y >= 4 && y < 12;
+                    EXPECT_TRUE(near(v, inside ? Vec3(1.f, 0.5f, 0.25f) : Vec3(0.f), 1e-4f))
+                        << "pixel " << x << "," << y << ": " << v.x << " " << v.y << " " << v.z;
+                    lit += v.x > 0.5f;
+                }
+            EXPECT_EQ(lit, 64);
+            if (first.empty()) first = image;
+            else EXPECT_EQ(0, std::memcmp(first.data(), image.data(), image.size() * sizeof(Vec3)));
+        }
+    }
+}

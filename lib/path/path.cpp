@@ -122,10 +122,10 @@ Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSample
                 uint64_t scramble = hashKey(pass.seed, Stage::Camera, pixel);
                 for (int s = 0; s < pass.spp; ++s) {
                     uint32_t index = uint32_t(pass.firstSample + s);
-                    Vec2 jitter = sobol2D(index, scramble);
+                    const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
                     Sampler sampler(pass.seed, Stage::Path, pixelSampleKey(pixel, index));
-                    PathRadiance r = tracePath(scene, accel, lights, rays.origin(),
-                                               rays.direction(Vec2(float(x), float(y)) + jitter), pass.maxDepth, sampler);
+                    PathRadiance r = tracePath(scene, accel, lights, rays.origin(raster), rays.direction(raster),
+                                               pass.maxDepth, sampler);
                     for (int l = 0; l < kLayerCount; ++l) {
                         Vec3 v = r.layer[l];
                         if (isFinite(v)) film.layers[l][pixel] += v * invSpp;  // one NaN must not poison a pixel

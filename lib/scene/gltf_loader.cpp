@@ -162,7 +162,7 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
             addMesh(node.mesh, world, where);
         }
     }
-    if (node.camera >= 0) addCamera(node.camera, world, where);
+    if (node.camera >= 0) addCamera(node.camera, world, where, node.name);
     auto ext = node.extensions.find("KHR_lights_punctual");
     if (ext != node.extensions.end() && ext->second.Has("light")) {
         int li = ext->second.Get("light").GetNumberAsInt();
@@ -175,24 +175,35 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
     for (int child : node.children) visitNode(child, world, depth + 1);
 }
 
-void GltfLoader::addCamera(int index, const Mat4& world, const std::string& nodeWhere) {
+void GltfLoader::addCamera(int index, const Mat4& world, const std::string& nodeWhere, const std::string& nodeName) {
     if (index >= int(model_.cameras.size())) fail(nodeWhere + " references camera " + std::to_string(index) + " which does not exist");
     const tinygltf::Camera& c = model_.cameras[index];
-    if (c.type != "perspective") {
-        warn("cameras that are not perspective (not used)",
-             quoted("camera", index, c.name) + " is " + c.type + "; only perspective cameras are used");
-        return;
-    }
+    const std::string where = quoted("camera", index, c.name);
     Camera cam;
     cam.name = c.name.empty() ? "camera " + std::to_string(index) : c.name;
+    cam.node = nodeName;
+    // The node's axes without its scale: the camera looks down its -Z, +Y up.
     cam.position = Vec3(world[3]);
     cam.forward = glm::normalize(-Vec3(world[2]));
     cam.right = glm::normalize(glm::cross(cam.forward, Vec3(world[1])));
     cam.up = glm::cross(cam.right, cam.forward);
-    cam.yfov = float(c.perspective.yfov);
-    cam.aspect = float(c.perspective.aspectRatio);
-    if (!(cam.yfov > 0.f && cam.yfov < kPi) || !isFinite(cam.forward) || !isFinite(cam.right))
-        fail(quoted("camera", index, c.name) + " has an invalid yfov or transform");
+    if (!isFinite(cam.forward) || !isFinite(cam.right)) fail(where + " (" + nodeWhere + ") has a degenerate transform");
+    if (c.type == "perspective") {
+        cam.yfov = float(c.perspective.yfov);
+        cam.aspect = float(c.perspective.aspectRatio);
+        if (!(cam.yfov > 0.f && cam.yfov < kPi)) fail(where + " has an invalid yfov");
+    } else if (c.type == "orthographic") {
+        // xmag and ymag are half the view's width and height (glTF 2.0 §3.10.3).
+        const double xmag = c.orthographic.xmag, ymag = c.orthographic.ymag;
+        if (!(xmag > 0.0 && ymag > 0.0 && std::isfinite(xmag / ymag) && std::isfinite(ymag)))
+            fail(where + " has an invalid xmag or ymag (not positive numbers)");
+        cam.projection = Projection::Orthographic;
+        cam.ymag = float(ymag);
+        cam.aspect = float(xmag / ymag);
+    } else {
+        warn("cameras of an unknown type (not used)", where + " is '" + c.type + "', neither perspective nor orthographic: not used");
+        return;
+    }
     scene_.cameras.push_back(cam);
 }
 

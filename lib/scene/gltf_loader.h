@@ -44,8 +44,11 @@ private:
     [[noreturn]] void fail(const std::string& what, ErrorKind kind = ErrorKind::Scene) const;
     void readFile();
     void checkExtensions();
+    // One warning a glTF feature or extension the file uses and the renderer ignores (material
+    // extensions, morph targets, skins, unknown extensions), naming the first object that uses it.
+    void warnIgnoredFeatures();
     void visitNode(int index, const Mat4& parent, int depth);
-    void addCamera(int index, const Mat4& world, const std::string& nodeWhere);
+    void addCamera(int index, const Mat4& world, const std::string& nodeWhere, const std::string& nodeName);
     // The scene's extras raysplat_sky [r, g, b], raysplat_env (a file beside the glTF),
     // raysplat_env_strength and raysplat_env_rotation: Scene::environment.
     void readEnvironment(const tinygltf::Value& extras, const std::string& where);

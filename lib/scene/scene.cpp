@@ -80,11 +80,24 @@ bool Scene::solidAt(uint32_t tri, float b1, float b2, float u) const {
     return m.alphaMode == AlphaMode::Mask ? a >= m.alphaCutoff : u < a;
 }
 
-Camera Scene::camera(const std::string& name) const {
-    if (!name.empty()) {
+Camera Scene::camera(const std::string& which) const {
+    if (!which.empty()) {
+        // Exporters often leave cameras unnamed (Blender names the node, not the camera): the
+        // camera's name first, then its node's, then its index.
         for (const Camera& c : cameras)
-            if (c.name == name) return c;
-        throw Error(ErrorKind::Config, path + ": no camera named '" + name + "'");
+            if (c.name == which) return c;
+        for (const Camera& c : cameras)
+            if (c.node == which) return c;
+        if (which.find_first_not_of("0123456789") == std::string::npos && which.size() < 10) {
+            const size_t index = std::stoul(which);
+            if (index < cameras.size()) return cameras[index];
+        }
+        std::string known;
+        for (size_t i = 0; i < cameras.size(); ++i)
+            known += (i ? ", " : "") + std::to_string(i) + " '" + cameras[i].name + "'" +
+                     (cameras[i].node.empty() ? "" : " on node '" + cameras[i].node + "'");
+        throw Error(ErrorKind::Config, path + ": no camera '" + which + "' by name, node name or index (" +
+                                           (known.empty() ? "the file has none" : "cameras: " + known) + ")");
     }
     if (!cameras.empty()) return cameras.front();
     // Frame the bounds: look along -Z from in front of the box, the whole box in view.

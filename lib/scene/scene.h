@@ -64,11 +64,20 @@ struct PunctualLight {
     }
 };
 
+// Perspective: rays from `position` through the image plane, `yfov` the vertical field.
+// Orthographic: parallel rays along `forward` from the plane through `position`, a view
+// 2·ymag metres high. Either way the image's width follows from its height and the image's
+// aspect (as glTF's aspectRatio, or xmag / ymag, gives it by default).
+enum class Projection { Perspective, Orthographic };
+
 struct Camera {
     std::string name = "default";
+    std::string node;        // the name of the node that places it; empty when unnamed or none
+    Projection projection = Projection::Perspective;
     Vec3 position{0.f};
     Vec3 right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, -1};  // unit, world space
-    float yfov = 0.7f;       // radians
+    float yfov = 0.7f;       // radians (perspective)
+    float ymag = 1.f;        // half the view's height, metres (orthographic)
     float aspect = 0.f;      // width / height from the file, 0 when not given
 };
 
@@ -97,7 +106,7 @@ struct Scene {
         float strength = 1.f, rotation = 0.f;  // rotation in degrees, as `env-rotation`
         Vec3 sky{0.f};     // a uniform sky; black: none
     } environment;
-    std::vector<Camera> cameras;  // every perspective camera of the file, in node order
+    std::vector<Camera> cameras;  // every camera the default scene's nodes place, in node order
     Bounds3 bounds;
 
     size_t triangleCount() const { return triMaterial.size(); }
@@ -116,8 +125,9 @@ struct Scene {
     // Whether triangle `tri` is there at barycentrics (b1, b2) for a ray whose own random number
     // is u in [0, 1): MASK compares alpha with the cutoff, BLEND with u.
     bool solidAt(uint32_t tri, float b1, float b2, float u) const;
-    // The camera to render: the named one, or the first, or one framing the bounds.
-    Camera camera(const std::string& name = "") const;
+    // The camera to render: the one `which` names (its name, its node's name, or its index in
+    // `cameras`, tried in that order), or the first, or one framing the bounds.
+    Camera camera(const std::string& which = "") const;
     // Total flux emitted by area and punctual lights, W (directional lights count over the
     // scene's bounding-sphere disc).
     Vec3 emittedPower() const;

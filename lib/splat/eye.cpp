@@ -72,7 +72,8 @@ public:
         for (int s = 0; s < st_.spp; ++s) {
             const uint32_t index = uint32_t(st_.firstSample + s);
             Sampler sampler(st_.seed, Stage::Eye, pixelSampleKey(pixel, index));
-            followCameraRay(scene_, accel_, environment(), rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+            const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
+            followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
                             Vec3(invSpp), st_.maxSpecularDepth, sampler, emission,
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 if (!withFilm_) addFeatures(pixel, invSpp, bsdf);
@@ -108,7 +109,8 @@ public:
             const uint32_t index = uint32_t(st_.firstDirectSample + s);
             const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
             Sampler sampler(st_.seed, Stage::DirectFilm, key);
-            followCameraRay(scene_, accel_, environment(), rays_.origin(), rays_.direction(Vec2(float(x), float(y)) + sobol2D(index, scramble)),
+            const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
+            followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
                             Vec3(invFilm), st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 addFeatures(pixel, invFilm, bsdf);
