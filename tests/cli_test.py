@@ -179,6 +179,18 @@ def bad_scene_tests(tmp):
     doc, _ = triangle_gltf(position_count=4)
     past_view = write_json(os.path.join(tmp, "accessor_past_view.gltf"), doc)
 
+    # A sparse POSITION accessor whose one index, 3, is past its 3 vertices.
+    doc, buf = triangle_gltf()
+    sparse = struct.pack("<H", 3) + b"\0\0" + struct.pack("<3f", 1, 1, 1)
+    buf += sparse
+    doc["buffers"][0] = {"byteLength": len(buf),
+                         "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}
+    doc["bufferViews"] += [{"buffer": 0, "byteOffset": len(buf) - 16, "byteLength": 2},
+                           {"buffer": 0, "byteOffset": len(buf) - 12, "byteLength": 12}]
+    doc["accessors"][0]["sparse"] = {"count": 1, "indices": {"bufferView": 2, "componentType": UNSIGNED_SHORT},
+                                     "values": {"bufferView": 3}}
+    sparse_past = write_json(os.path.join(tmp, "sparse_index_past_accessor.gltf"), doc)
+
     # An extension the renderer cannot do without.
     doc, _ = triangle_gltf()
     doc["extensionsUsed"] = doc["extensionsRequired"] = ["KHR_draco_mesh_compression"]
@@ -219,6 +231,7 @@ def bad_scene_tests(tmp):
         case("index out of range", bad_index, "mesh 0", "7"),
         case("NaN vertex", nan_vertex, "mesh 0", "vertex 1"),
         case("accessor past its bufferView", past_view, "accessor 0"),
+        case("sparse index past its accessor", sparse_past, "accessor 0", "index 3"),
         case("unsupported extensionsRequired", draco, "KHR_draco_mesh_compression"),
         # The loader says "image 0"; errors passed on from tinygltf say "image[0]".
         case("0-byte PNG texture", zero_png, IMAGE_0),
@@ -530,6 +543,84 @@ def test_repeated_warnings_collapse():
         check(lines[2].startswith("raysplat: error: ") and "no triangles" in lines[2], "error: %r" % lines[2])
 
 
+def emissive_triangle_gltf():
+    """The triangle, emissive, for renders that need no lights."""
+    doc, _ = triangle_gltf()
+    doc["meshes"][0]["primitives"][0]["material"] = 0
+    doc["materials"] = [{"name": "glow", "emissiveFactor": [1, 1, 1]}]
+    return doc
+
+
+def test_cameras_by_name_node_or_index():
+    """An unnamed perspective camera on node 'Front' and an orthographic 'top view' on node
+    'Top': info lists both with index, name, node and type; --camera 1, --camera Top and
+    --camera 'top view' render the same pixels, --camera 0 others; --camera 2 is an error."""
+    doc = emissive_triangle_gltf()
+    doc["scenes"][0]["nodes"] = [0, 1, 2]
+    doc["nodes"] += [{"name": "Front", "camera": 0, "translation": [0.3, 0.3, 3]},
+                     {"name": "Top", "camera": 1, "translation": [0.3, 0.3, 2]}]
+    doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}},
+                      {"name": "top view", "type": "orthographic",
+                       "orthographic": {"xmag": 0.6, "ymag": 0.6, "znear": 0.1, "zfar": 10}}]
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
+        scene = write_json(os.path.join(tmp, "cameras.gltf"), doc)
+        info = run("info", scene)
+        check(info.returncode == 0 and info.stderr == "", "info: exit %d: %r" % (info.returncode, info.stderr))
+        lines = [l for l in info.stdout.splitlines() if l.startswith("camera")]
+        check(len(lines) == 2, "info lists %d cameras: %r" % (len(lines), lines))
+        check(lines[0].startswith("camera 0") and "'camera 0' (node 'Front')" in lines[0] and "perspective" in lines[0]
+              and "default" in lines[0], "info's camera 0: %r" % lines[0])
+        check(lines[1].startswith("camera 1") and "'top view' (node 'Top')" in lines[1] and "orthographic" in lines[1],
+              "info's camera 1: %r" % lines[1])
+        pixels = {}
+        for which in ("1", "Top", "top view", "0"):
+            exr = os.path.join(tmp, "c.exr")
+            r = run("render", scene, "-o", exr, "--method", "path", "--spp", "1", "--width", "16", "--quiet",
+                    "--camera", which)
+            check(r.returncode == 0, "--camera %r: %r" % (which, r.stderr))
+            with open(exr, "rb") as f:
+                pixels[which] = exr_pixel_chunks(f.read())
+        check(pixels["1"] == pixels["Top"] == pixels["top view"], "--camera 1, Top and 'top view' differ")
+        check(pixels["0"] != pixels["1"], "--camera 0 renders what --camera 1 does")
+        with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+            expect_clean_error("--camera past the list", ["render", scene, "-o", os.path.join(out, "x.exr"),
+                                                          "--camera", "2"], ["no camera '2'", "1 'top view'"], out)
+
+
+def test_ignored_features_warn_once_each():
+    """Clearcoat on two materials, sheen on one, morph targets, a skin and an unknown
+    extension: one warning line each, naming the feature and the first object (the second
+    clearcoat material counted), and the scene still loads. The same file with a broken index
+    is one error line, none of the warnings."""
+    doc = emissive_triangle_gltf()
+    prim = doc["meshes"][0]["primitives"][0]
+    doc["meshes"].append({"name": "face", "primitives": [dict(prim, targets=[{"POSITION": 0}])]})
+    doc["materials"] = [{"name": "paint", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1}}},
+                        {"name": "velvet", "extensions": {"KHR_materials_sheen": {},
+                                                          "KHR_materials_clearcoat": {"clearcoatFactor": 0.5}}}]
+    doc["nodes"] += [{"name": "body", "mesh": 1, "skin": 0}, {"name": "bone"}]
+    doc["skins"] = [{"joints": [2]}]
+    doc["scenes"][0]["nodes"] = [0, 1, 2]
+    doc["extensionsUsed"] = ["KHR_materials_clearcoat", "KHR_materials_sheen", "EXT_made_up"]
+    want = [("KHR_materials_clearcoat", "material 0 'paint' and 1 more"), ("KHR_materials_sheen", "material 1 'velvet'"),
+            ("morph targets", "mesh 1 'face'"), ("skins", "node 1 'body'"), ("EXT_made_up", "extensionsUsed")]
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
+        scene = write_json(os.path.join(tmp, "ignored.gltf"), doc)
+        r = run("info", scene)
+        lines = r.stderr.splitlines()
+        MESSAGES.append(("ignored features", "info", " | ".join(lines)))
+        check(r.returncode == 0, "info: exit %d: %r" % (r.returncode, r.stderr))
+        check(len(lines) == len(want), "%d warning lines, expected %d: %r" % (len(lines), len(want), lines))
+        for feature, obj in want:
+            hits = [l for l in lines if feature in l]
+            check(len(hits) == 1 and obj in hits[0] and "ignored.gltf" in hits[0],
+                  "%s: %r, expected one line naming %r" % (feature, hits, obj))
+        doc["accessors"][1]["count"] = 6
+        broken = write_json(os.path.join(tmp, "ignored_broken.gltf"), doc)
+        with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+            expect_clean_error("ignored features, broken index", ["info", broken], ["accessor 1"], out)
+
+
 def test_auto_voxelizer_follows_the_egl_device():
     """--voxelizer auto runs the GPU voxelizer on a hardware EGL device and the CPU one
     otherwise (on llvmpipe, or with no EGL at all), as `info --gpu` describes the device."""
@@ -651,6 +742,8 @@ def main():
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,
             test_repeated_warnings_collapse,
+            test_cameras_by_name_node_or_index,
+            test_ignored_features_warn_once_each,
             test_cache_under_concurrent_writers,
             test_auto_voxelizer_follows_the_egl_device,
             test_no_arguments_prints_usage_and_exits_2,

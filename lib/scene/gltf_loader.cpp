@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <map>
 #include <set>
 
 namespace rs::gltf {
@@ -13,6 +14,19 @@ namespace {
 const std::set<std::string> kSupportedExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
     "KHR_materials_ior"};
+
+// Material extensions read past without being honoured: what each would add.
+const std::map<std::string, std::string> kIgnoredMaterialExtensions = {
+    {"KHR_materials_anisotropy", "anisotropic highlights"},
+    {"KHR_materials_clearcoat", "a clear coat layer"},
+    {"KHR_materials_diffuse_transmission", "diffuse transmission"},
+    {"KHR_materials_dispersion", "dispersion"},
+    {"KHR_materials_iridescence", "thin-film iridescence"},
+    {"KHR_materials_pbrSpecularGlossiness", "the specular-glossiness model"},
+    {"KHR_materials_sheen", "a sheen layer"},
+    {"KHR_materials_specular", "the specular strength and colour"},
+    {"KHR_materials_unlit", "unlit shading"},
+    {"KHR_materials_volume", "volume attenuation and thickness"}};
 
 std::string firstLine(std::string s) {
     while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
@@ -59,7 +73,8 @@ Scene GltfLoader::loadAll() {
     if (scene_.triangleCount() == 0) fail("the scene has no triangles");
     scene_.computeBounds();
     reportRepeatedWarnings();
-    // tinygltf's warning only once the load succeeded: a failed load is one error line.
+    // These warnings only once the load succeeded: a failed load is one error line.
+    warnIgnoredFeatures();
     if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
     return std::move(scene_);
 }
@@ -114,6 +129,32 @@ void GltfLoader::checkExtensions() {
     for (const std::string& e : model_.extensionsRequired)
         if (!kSupportedExtensions.count(e))
             fail("required extension '" + e + "' is not supported");
+}
+
+void GltfLoader::warnIgnoredFeatures() {
+    // Feature → the first object that uses it and how many do: one line a feature.
+    std::map<std::string, std::pair<std::string, int>> uses;
+    auto use = [&](const std::string& feature, const std::string& object) {
+        if (uses[feature].second++ == 0) uses[feature].first = object;
+    };
+    for (size_t i = 0; i < model_.materials.size(); ++i)
+        for (const auto& [name, value] : model_.materials[i].extensions)
+            if (auto it = kIgnoredMaterialExtensions.find(name); it != kIgnoredMaterialExtensions.end())
+                use(name + " (" + it->second + ")", quoted("material", int(i), model_.materials[i].name));
+    for (size_t i = 0; i < model_.meshes.size(); ++i)
+        for (const tinygltf::Primitive& prim : model_.meshes[i].primitives)
+            if (!prim.targets.empty()) {
+                use("morph targets (the base shape is rendered)", quoted("mesh", int(i), model_.meshes[i].name));
+                break;
+            }
+    for (size_t i = 0; i < model_.nodes.size(); ++i)
+        if (model_.nodes[i].skin >= 0)
+            use("skins (the mesh is rendered unposed, where its node puts it)", quoted("node", int(i), model_.nodes[i].name));
+    for (const std::string& e : model_.extensionsUsed)
+        if (!kSupportedExtensions.count(e) && !kIgnoredMaterialExtensions.count(e)) use("extension " + e, "the file's extensionsUsed");
+    for (const auto& [feature, u] : uses)
+        reporter_.warn(path_ + ": ignored: " + feature + " in " + u.first +
+                       (u.second > 1 ? " and " + std::to_string(u.second - 1) + " more" : ""));
 }
 
 bool GltfLoader::isPortal(const tinygltf::Node& node) {
