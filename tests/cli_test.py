@@ -210,6 +210,15 @@ def bad_scene_tests(tmp):
     empty_data_uri = write_json(os.path.join(tmp, "empty_png_data_uri.gltf"),
                                 textured_gltf("data:image/png;base64,"))
 
+    # A good 64 x 64 RGB PNG cut off in its image data, and a text file named .png.
+    rows = b"".join(b"\x00" + bytes((x * 4 + y) % 256 for x in range(64 * 3)) for y in range(64))
+    good_png = (PNG_SIGNATURE + png_chunk(b"IHDR", struct.pack(">IIBBBBB", 64, 64, 8, 2, 0, 0, 0))
+                + png_chunk(b"IDAT", zlib.compress(rows)) + png_chunk(b"IEND", b""))
+    write_bytes(os.path.join(tmp, "cut.png"), good_png[:len(good_png) // 2])
+    truncated_png = write_json(os.path.join(tmp, "truncated_png_texture.gltf"), textured_gltf("cut.png"))
+    write_bytes(os.path.join(tmp, "notes.png"), b"these are notes, not an image\n")
+    text_png = write_json(os.path.join(tmp, "text_png_texture.gltf"), textured_gltf("notes.png"))
+
     # data/glossy_box.glb cut short: the BIN chunk is truncated. Once as it is (the header's
     # length disagrees too), once with the header's total length patched to the file's length
     # so that only the BIN chunk's own length is wrong.
@@ -238,6 +247,8 @@ def bad_scene_tests(tmp):
         case("0-byte PNG texture as a data URI", empty_data_uri, IMAGE_0),
         case("0x0 PNG texture", zero_size_png, IMAGE_0),
         case("0x0 PNG texture as a data URI", zero_data_uri, IMAGE_0),
+        case("truncated PNG texture", truncated_png, "image 0", "cut.png"),
+        case("text file named .png as a texture", text_png, "image 0", "notes.png"),
         case("truncated .glb", truncated),
         case(".glb with a truncated chunk", patched),
         case("empty .gltf", empty_gltf),

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <zlib.h>
+
 #include "core/error.h"
 #include "core/log.h"
 #include "scene/scene.h"
@@ -975,4 +977,89 @@ TEST(Camera, OrthographicImageOfASquareIsTheSameAtAnyDistance) {
             else EXPECT_EQ(0, std::memcmp(first.data(), image.data(), image.size() * sizeof(Vec3)));
         }
     }
+}
+
+namespace {
+
+// A PNG file of w × h pixels with `channels` (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) of `bits`
+// (8 or 16) bits, pixel values v(x, y, channel), written here with zlib.
+std::string pngFile(int w, int h, int channels, int bits, unsigned (*v)(int, int, int)) {
+    auto be32 = [](uint32_t x) { return std::string{char(x >> 24), char(x >> 16), char(x >> 8), char(x)}; };
+    auto chunk = [&](const std::string& type, const std::string& data) {
+        const std::string body = type + data;
+        return be32(uint32_t(data.size())) + body +
+               be32(uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
+    };
+    std::string raw;
+    for (int y = 0; y < h; ++y) {
+        raw += '\0';  // filter: none
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < channels; ++c) {
+                if (bits == 16) raw += char(v(x, y, c) >> 8);
+                raw += char(v(x, y, c) & 255u);
+            }
+    }
+    uLongf size = compressBound(uLong(raw.size()));
+    std::string packed(size, '\0');
+    compress(reinterpret_cast<Bytef*>(packed.data()), &size, reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size()));
+    packed.resize(size);
+    const char colourType[] = {0, 0, 4, 2, 6};
+    const std::string ihdr = be32(uint32_t(w)) + be32(uint32_t(h)) + char(bits) + colourType[channels] + std::string(3, '\0');
+    return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", packed) + chunk("IEND", "");
+}
+
+unsigned wideValue(int x, int y, int c) { return unsigned(x * 13001 + y * 7919 + c * 20011) % 65536u; }
+unsigned greyAlphaValue(int x, int y, int c) { return c == 0 ? unsigned(x * 60 + y) : unsigned(y * 80); }
+
+}  // namespace
+
+// Three PNG textures (16-bit RGB, 8-bit grey + alpha, 8-bit RGBA): decoded on one thread and on
+// three, every texel is the same; the 16-bit image keeps its 16 bits (8 bytes a texel, values
+// v / 65535 through the sRGB formula); grey is expanded to RGB and keeps its alpha.
+TEST(Loader, ImagesDecodeAlikeOnAnyThreadCountAndSixteenBitsStay) {
+    TempDir dir;
+    GltfBuilder g;
+    std::vector<std::string> primitives;
+    const int positions = g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    for (int i = 0; i < 3; ++i)
+        primitives.push_back(GltfBuilder::primitive(positions, -1, kTriangles, g.material(
+            "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":" + std::to_string(i) + "}}}")));
+    g.node("\"mesh\":" + std::to_string(g.mesh(primitives)));
+    g.extra("\"textures\":[{\"source\":0},{\"source\":1},{\"source\":2}],"
+            "\"images\":[{\"uri\":\"wide.png\"},{\"uri\":\"grey.png\"},{\"uri\":\"rgba.png\"}]");
+    writeFile(dir.file("wide.png"), pngFile(5, 3, 3, 16, wideValue));
+    writeFile(dir.file("grey.png"), pngFile(4, 4, 2, 8, greyAlphaValue));
+    writeFile(dir.file("rgba.png"), pngFile(3, 2, 4, 8, [](int x, int y, int c) { return unsigned(x * 90 + y * 40 + c * 20); }));
+    const std::string path = g.write(dir, "images");
+    const Scene one = loadScene(path, silentReporter(), 1), three = loadScene(path, silentReporter(), 3);
+    ASSERT_EQ(one.textures.size(), 3u);
+    ASSERT_EQ(three.textures.size(), 3u);
+    for (size_t t = 0; t < 3; ++t)
+        for (int l = 0; l < one.textures[t].levelCount(); ++l)
+            for (int y = 0; y < one.textures[t].levelHeight(l); ++y)
+                for (int x = 0; x < one.textures[t].levelWidth(l); ++x)
+                    ASSERT_EQ(one.textures[t].texel(l, x, y), three.textures[t].texel(l, x, y)) << t << " " << l;
+
+    const Texture& wide = one.textures[0];
+    EXPECT_TRUE(wide.sixteenBit());
+    EXPECT_FALSE(wide.hasAlpha());
+    EXPECT_EQ(wide.bytes(), 8u * (15 + 2 + 1));  // 5×3, 2×1, 1×1
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 5; ++x)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(wide.texel(0, x, y)[c], std::pow((wideValue(x, y, c) / 65535.0 + 0.055) / 1.055, 2.4) *
+                                                        (wideValue(x, y, c) / 65535.0 > 0.04045) +
+                                                        (wideValue(x, y, c) / 65535.0 <= 0.04045) * wideValue(x, y, c) / 65535.0 / 12.92,
+                            1e-5);
+    const Texture& grey = one.textures[1];
+    EXPECT_FALSE(grey.sixteenBit());
+    EXPECT_TRUE(grey.hasAlpha());
+    EXPECT_EQ(grey.bytes(), 4u * (16 + 4 + 1));
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+            const Vec4 t = grey.texel(0, x, y);
+            EXPECT_EQ(t.x, t.z);
+            EXPECT_EQ(t.w, float(greyAlphaValue(x, y, 1)) / 255.f);
+            EXPECT_EQ(grey.alphaAt(y * 4 + x), t.w);
+        }
 }

@@ -5,6 +5,7 @@
 #include "scene/bsdf.h"
 #include "scene/camera.h"
 #include "scene/direct.h"
+#include "scene/ray_cone.h"
 #include "core/sampling.h"
 
 namespace rs {
@@ -35,6 +36,11 @@ struct PathClass {
 
 PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, Vec3 o, Vec3 d,
                        int maxDepth, Sampler& sampler) {
+    return tracePath(scene, accel, lights, o, d, maxDepth, sampler, RayCone());
+}
+
+PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, Vec3 o, Vec3 d,
+                       int maxDepth, Sampler& sampler, RayCone cone) {
     PathRadiance out;
     Vec3 beta(1.f);
     PathClass cls;
@@ -50,6 +56,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
             out.layer[cls.layerOfHit()] += beta * environmentSeen(lights, prevDelta ? 0.f : prevPdf, d);
             break;
         }
+        cone.footprintAt(sp, scene, t, d);
         const Material& m = scene.materials[sp.material];
 
         // Emitters: front face only; MIS against the light sampling of the previous vertex.
@@ -92,6 +99,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
         prevDelta = bs.delta;
         prevPdf = bs.pdf;
         prevP = sp.p;
+        cone = cone.scattered(t, bsdf);
         o = offsetRayOrigin(sp, bs.wi);
         d = bs.wi;
 
@@ -111,6 +119,7 @@ Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSample
     const int width = pass.width, height = pass.height;
     Film film(width, height);
     CameraRays rays(camera, width, height);
+    const RayCone pixelCone = RayCone::fromCamera(camera, height);
     const float invSpp = 1.f / float(pass.spp);
     const int rowBegin = std::clamp(pass.rowBegin, 0, height);
     const int rowEnd = pass.rowEnd > 0 ? std::clamp(pass.rowEnd, rowBegin, height) : height;
@@ -125,7 +134,7 @@ Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSample
                     const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
                     Sampler sampler(pass.seed, Stage::Path, pixelSampleKey(pixel, index));
                     PathRadiance r = tracePath(scene, accel, lights, rays.origin(raster), rays.direction(raster),
-                                               pass.maxDepth, sampler);
+                                               pass.maxDepth, sampler, pixelCone);
                     for (int l = 0; l < kLayerCount; ++l) {
                         Vec3 v = r.layer[l];
                         if (isFinite(v)) film.layers[l][pixel] += v * invSpp;  // one NaN must not poison a pixel

@@ -15,6 +15,8 @@
 
 namespace rs {
 
+struct RayCone;
+
 struct PathSettings {
     int width = 500, height = 500;
     int firstSample = 0;  // sample indices [firstSample, firstSample + spp) of every pixel
@@ -31,12 +33,15 @@ struct PathSettings {
 Film renderPathPass(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const Camera& camera,
                     const PathSettings& settings, ThreadPool& pool, Reporter& reporter);
 
-// Radiance along one camera ray, split into layers (for tests: analytic checks).
+// Radiance along one camera ray, split into layers (for tests: analytic checks). `cone`: the
+// ray's footprint for texture filtering (ray_cone.h); a point by default.
 struct PathRadiance {
     Vec3 layer[kLayerCount] = {};
     Vec3 albedo{0.f}, normal{0.f};
     Vec3 total() const { return layer[0] + layer[1] + layer[2] + layer[3]; }
 };
+PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, Vec3 origin,
+                       Vec3 dir, int maxDepth, class Sampler& sampler, RayCone cone);
 PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, Vec3 origin,
                        Vec3 dir, int maxDepth, class Sampler& sampler);
 

@@ -14,6 +14,9 @@ struct SurfacePoint {
     Vec3 ng;         // geometric normal of the winding (front side), unit
     Vec3 ns;         // interpolated shading normal, unit
     Vec2 uv;
+    // Width of the ray's footprint across the surface in uv units (ray_cone.h), for filtering
+    // textures (Texture::lodOf); 0, as intersect() leaves it: a point, the full-size image.
+    float uvFootprint = 0.f;
     uint32_t tri = 0;
     uint32_t material = 0;
     bool frontFace = true;  // the ray came from the side ng points to

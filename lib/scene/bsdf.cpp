@@ -67,7 +67,7 @@ float fresnelDielectric(float cosThetaI, float eta) {
 }
 
 Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
-    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.uv)) {
+    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.uv, sp.uvFootprint)) {
     const Material& m = *material_;
     bool outside = glm::dot(wo, sp.ng) >= 0.f;
     ng_ = outside ? sp.ng : -sp.ng;

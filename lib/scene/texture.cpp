@@ -106,21 +106,32 @@ void Texture::layOutLevels(int width, int height) {
     }
 }
 
-// Level l from level l − 1, a row at a time: the box filter in linear values (sRGB decoded), so a
-// fine pattern of black and white averages to the grey it looks like from afar.
+// Level l from level l − 1 by the box filter in linear values (sRGB decoded), so that a fine
+// pattern of black and white averages to the grey it looks like from afar. Each level is filtered
+// from the unrounded values of the one above (kept in `above`, a quarter of level 0's texels in
+// floats at most), so that rounding to 8 bits happens once a level instead of piling up.
 template <class T>
 void Texture::buildMips(std::vector<T>& texels) {
     const Codec<T> codec{srgb_};
+    std::vector<float> above, below;
     for (size_t l = 1; l < levels_.size(); ++l) {
         const Level& from = levels_[l - 1];
         const Level& to = levels_[l];
         const BoxTaps tx(from.width, to.width), ty(from.height, to.height);
-        std::vector<float> row(4 * size_t(from.width)), sum(4 * size_t(to.width));
+        std::vector<float> decoded(l == 1 ? 4 * size_t(from.width) : 0);
+        below.assign(4 * size_t(to.width) * size_t(to.height), 0.f);
         for (int j = 0; j < to.height; ++j) {
-            std::fill(sum.begin(), sum.end(), 0.f);
+            float* sum = &below[4 * size_t(j) * size_t(to.width)];
             for (int t = ty.first[size_t(j)]; t < ty.first[size_t(j) + 1]; ++t) {
-                const T* src = &texels[4 * (from.offset + size_t(ty.taps[size_t(t)].source) * size_t(from.width))];
-                for (size_t k = 0; k < row.size(); ++k) row[k] = codec.decode(src[k], int(k & 3));
+                const size_t sourceRow = size_t(ty.taps[size_t(t)].source) * size_t(from.width);
+                const float* row = nullptr;
+                if (l == 1) {
+                    const T* src = &texels[4 * (from.offset + sourceRow)];
+                    for (size_t k = 0; k < decoded.size(); ++k) decoded[k] = codec.decode(src[k], int(k & 3));
+                    row = decoded.data();
+                } else {
+                    row = &above[4 * sourceRow];
+                }
                 const float wy = ty.taps[size_t(t)].weight;
                 for (int i = 0; i < to.width; ++i)
                     for (int s = tx.first[size_t(i)]; s < tx.first[size_t(i) + 1]; ++s) {
@@ -129,9 +140,10 @@ void Texture::buildMips(std::vector<T>& texels) {
                         for (int c = 0; c < 4; ++c) sum[4 * size_t(i) + size_t(c)] += w * in[c];
                     }
             }
-            T* dst = &texels[4 * (to.offset + size_t(j) * size_t(to.width))];
-            for (size_t k = 0; k < sum.size(); ++k) dst[k] = codec.encode(sum[k], int(k & 3));
         }
+        T* dst = &texels[4 * to.offset];
+        for (size_t k = 0; k < below.size(); ++k) dst[k] = codec.encode(below[k], int(k & 3));
+        std::swap(above, below);
     }
 }
 

@@ -4,6 +4,7 @@
 #include "scene/bsdf.h"
 #include "scene/camera.h"
 #include "scene/direct.h"
+#include "scene/ray_cone.h"
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/sampling.h"
@@ -20,13 +21,13 @@ bool reflectsNothing(const Material& m) {
     return m.kind == MaterialKind::Lambert && m.baseColorTexture < 0 && isBlack(m.baseColor);
 }
 
-// Follows a camera ray of weight `weight` through specular surfaces to the first non-specular
+// Follows a camera ray of weight `weight` (and footprint `cone`) through specular surfaces to the first non-specular
 // one, adding the emitters met on the way (front faces) to `emission`; there calls
 // atSurface(sp, bsdf, wo, weight). Returns without a call when the ray leaves the scene (adding
 // the environment it sees, if any) or the chain ends.
 template <class AtSurface>
 void followCameraRay(const Scene& scene, const RayAccel& accel, const Environment* env, Vec3 o, Vec3 d, Vec3 weight,
-                     int maxDepth, Sampler& sampler, Vec3& emission, AtSurface&& atSurface) {
+                     RayCone cone, int maxDepth, Sampler& sampler, Vec3& emission, AtSurface&& atSurface) {
     for (int depth = 0; depth <= maxDepth; ++depth) {
         SurfacePoint sp;
         float t;
@@ -34,6 +35,7 @@ void followCameraRay(const Scene& scene, const RayAccel& accel, const Environmen
             if (env) emission += weight * env->radiance(d);
             return;
         }
+        cone.footprintAt(sp, scene, t, d);
         const Material& m = scene.materials[sp.material];
         if (m.isEmissive() && sp.frontFace) emission += weight * m.emission;
         const Vec3 wo = -d;
@@ -46,6 +48,7 @@ void followCameraRay(const Scene& scene, const RayAccel& accel, const Environmen
         BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
         if (bs.pdf <= 0.f || isBlack(bs.weight)) return;
         weight *= bs.weight;
+        cone = cone.scattered(t, bsdf);
         o = offsetRayOrigin(sp, bs.wi);
         d = bs.wi;
     }
@@ -56,7 +59,8 @@ class EyePassTracer {
 public:
     EyePassTracer(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
                   const EyePassSettings& st, Film& film)
-        : scene_(scene), accel_(accel), lights_(lights), rays_(camera, st.width, st.height), st_(st), film_(film),
+        : scene_(scene), accel_(accel), lights_(lights), rays_(camera, st.width, st.height),
+          pixelCone_(RayCone::fromCamera(camera, st.height)), st_(st), film_(film),
           direct_(st.directSamples > 0 && lights && !lights->empty()), withFilm_(st.directSpp > 0) {}
 
     const Environment* environment() const { return lights_ ? lights_->environment() : nullptr; }
@@ -74,7 +78,7 @@ public:
             Sampler sampler(st_.seed, Stage::Eye, pixelSampleKey(pixel, index));
             const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
             followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
-                            Vec3(invSpp), st_.maxSpecularDepth, sampler, emission,
+                            Vec3(invSpp), pixelCone_, st_.maxSpecularDepth, sampler, emission,
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 if (!withFilm_) addFeatures(pixel, invSpp, bsdf);
                 if (reflectsNothing(scene_.materials[sp.material])) return;
@@ -111,7 +115,7 @@ public:
             Sampler sampler(st_.seed, Stage::DirectFilm, key);
             const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
             followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
-                            Vec3(invFilm), st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
+                            Vec3(invFilm), pixelCone_, st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
                             [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
                 addFeatures(pixel, invFilm, bsdf);
                 if (!direct_ || reflectsNothing(scene_.materials[sp.material])) return;
@@ -136,6 +140,7 @@ private:
     const RayAccel& accel_;
     const LightSampler* lights_;
     const CameraRays rays_;
+    const RayCone pixelCone_;
     const EyePassSettings& st_;
     Film& film_;  // each pixel is written by the thread that owns its row only
     const bool direct_, withFilm_;

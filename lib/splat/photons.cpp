@@ -14,6 +14,7 @@
 
 #include "scene/accel.h"
 #include "scene/bsdf.h"
+#include "scene/ray_cone.h"
 #include "core/stats.h"
 #include "core/error.h"
 #include "splat/eye.h"
@@ -76,6 +77,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
         o = offsetRayOrigin(onLight, d);
     }
     Vec3 originNormal = e.normal;
+    RayCone cone = RayCone::fromLight();
     float lastPdf = e.pdfDir;          // solid-angle pdf of the last sampled direction
     float lengthSince = 0.f;           // path length since that vertex
     float prefix = e.choiceProb;       // probability of the prefix (choice × RR survival)
@@ -93,6 +95,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
         float t;
         if (!accel.intersect(o, d, kInf, sp, t)) return;
         lengthSince += t;
+        cone.footprintAt(sp, scene, t, d);
         Bsdf bsdf(scene, sp, -d);
         if (!bsdf.isDelta()) {
             PhotonRay r;
@@ -129,6 +132,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
             lengthSince = 0.f;
         }
         originNormal = glm::dot(bs.wi, sp.ng) >= 0.f ? sp.ng : -sp.ng;
+        cone = cone.scattered(t, bsdf);
         o = offsetRayOrigin(sp, bs.wi);
         d = bs.wi;
     }
