@@ -168,6 +168,9 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
     stats.setCount("ranks", ranks.size());
     stats.setCount("simd_lanes", int(traversalIsa()));  // the occlusion tree traversal's: 4 (sse2) or 16 (avx512)
     stats.setCount("triangles", double(scene.triangleCount()));
+    double textureBytes = 0.0;
+    for (const Texture& t : scene.textures) textureBytes += double(t.bytes());
+    stats.setCount("texture_mb", textureBytes / kMB);  // texels of every mip level
     stats.setCount("width", width);
     stats.setCount("height", height);
 

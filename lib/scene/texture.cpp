@@ -23,11 +23,23 @@ namespace {
 // (a linear value encodes to the code nearest to it in linear terms, so a level's mean stays the
 // mean of the level above it to within half a step).
 struct Srgb8 {
+    static constexpr int kBuckets = 4096;
     std::array<float, 256> toLinear;
     std::array<float, 255> midpoint;
+    // The code of the bucket's lowest value, x in [k, k + 1) / kBuckets: encode() starts there and
+    // steps past the (at most two) midpoints inside the bucket.
+    std::array<uint8_t, kBuckets + 1> bucketStart;
     Srgb8() {
         for (int k = 0; k < 256; ++k) toLinear[size_t(k)] = srgbToLinear(float(k) / 255.f);
         for (int k = 0; k < 255; ++k) midpoint[size_t(k)] = 0.5f * (toLinear[size_t(k)] + toLinear[size_t(k) + 1]);
+        for (int k = 0; k <= kBuckets; ++k)
+            bucketStart[size_t(k)] = uint8_t(std::upper_bound(midpoint.begin(), midpoint.end(), float(k) / kBuckets) - midpoint.begin());
+    }
+    // The code whose linear value is nearest to x in [0, 1] (the number of midpoints ≤ x).
+    uint8_t encode(float x) const {
+        int code = bucketStart[size_t(x * float(kBuckets))];
+        while (code < 255 && midpoint[size_t(code)] <= x) ++code;
+        return uint8_t(code);
     }
 };
 const Srgb8 kSrgb8;
@@ -44,10 +56,9 @@ struct Codec {
     }
     T encode(float x, int c) const {
         x = std::clamp(x, 0.f, 1.f);
-        if (!srgb || c == 3) return T(std::lround(x * kMax));
-        if constexpr (sizeof(T) == 1)
-            return T(std::upper_bound(kSrgb8.midpoint.begin(), kSrgb8.midpoint.end(), x) - kSrgb8.midpoint.begin());
-        return T(std::lround(linearToSrgb(x) * kMax));
+        if (!srgb || c == 3) return T(x * kMax + 0.5f);
+        if constexpr (sizeof(T) == 1) return kSrgb8.encode(x);
+        return T(linearToSrgb(x) * kMax + 0.5f);
     }
 };
 
@@ -120,25 +131,38 @@ void Texture::buildMips(std::vector<T>& texels) {
         const BoxTaps tx(from.width, to.width), ty(from.height, to.height);
         std::vector<float> decoded(l == 1 ? 4 * size_t(from.width) : 0);
         below.assign(4 * size_t(to.width) * size_t(to.height), 0.f);
-        for (int j = 0; j < to.height; ++j) {
-            float* sum = &below[4 * size_t(j) * size_t(to.width)];
-            for (int t = ty.first[size_t(j)]; t < ty.first[size_t(j) + 1]; ++t) {
-                const size_t sourceRow = size_t(ty.taps[size_t(t)].source) * size_t(from.width);
-                const float* row = nullptr;
-                if (l == 1) {
-                    const T* src = &texels[4 * (from.offset + sourceRow)];
-                    for (size_t k = 0; k < decoded.size(); ++k) decoded[k] = codec.decode(src[k], int(k & 3));
-                    row = decoded.data();
-                } else {
-                    row = &above[4 * sourceRow];
+        // Row r of the level above in linear values: decoded from the texels (level 0) or kept.
+        auto sourceRow = [&](int r) -> const float* {
+            if (l > 1) return &above[4 * size_t(r) * size_t(from.width)];
+            const T* src = &texels[4 * (from.offset + size_t(r) * size_t(from.width))];
+            for (size_t k = 0; k < decoded.size(); ++k) decoded[k] = codec.decode(src[k], int(k & 3));
+            return decoded.data();
+        };
+        if (from.width == 2 * to.width && from.height == 2 * to.height) {
+            // Both sides halve: each texel averages a 2 × 2 block (most levels of most images).
+            std::vector<float> upper(4 * size_t(from.width));
+            for (int j = 0; j < to.height; ++j) {
+                const float* a = sourceRow(2 * j);
+                std::copy(a, a + upper.size(), upper.begin());
+                const float* b = sourceRow(2 * j + 1);
+                float* sum = &below[4 * size_t(j) * size_t(to.width)];
+                for (size_t i = 0; i < 4 * size_t(to.width); i += 4)
+                    for (size_t c = 0; c < 4; ++c)
+                        sum[i + c] = 0.25f * ((upper[2 * i + c] + upper[2 * i + 4 + c]) + (b[2 * i + c] + b[2 * i + 4 + c]));
+            }
+        } else {
+            for (int j = 0; j < to.height; ++j) {
+                float* sum = &below[4 * size_t(j) * size_t(to.width)];
+                for (int t = ty.first[size_t(j)]; t < ty.first[size_t(j) + 1]; ++t) {
+                    const float* row = sourceRow(ty.taps[size_t(t)].source);
+                    const float wy = ty.taps[size_t(t)].weight;
+                    for (int i = 0; i < to.width; ++i)
+                        for (int s = tx.first[size_t(i)]; s < tx.first[size_t(i) + 1]; ++s) {
+                            const float w = wy * tx.taps[size_t(s)].weight;
+                            const float* in = &row[4 * size_t(tx.taps[size_t(s)].source)];
+                            for (int c = 0; c < 4; ++c) sum[4 * size_t(i) + size_t(c)] += w * in[c];
+                        }
                 }
-                const float wy = ty.taps[size_t(t)].weight;
-                for (int i = 0; i < to.width; ++i)
-                    for (int s = tx.first[size_t(i)]; s < tx.first[size_t(i) + 1]; ++s) {
-                        const float w = wy * tx.taps[size_t(s)].weight;
-                        const float* in = &row[4 * size_t(tx.taps[size_t(s)].source)];
-                        for (int c = 0; c < 4; ++c) sum[4 * size_t(i) + size_t(c)] += w * in[c];
-                    }
             }
         }
         T* dst = &texels[4 * to.offset];
