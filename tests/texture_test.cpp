@@ -113,9 +113,12 @@ TEST(Texture, LodIsLog2OfTheTexelsAFootprintSpans) {
 
 // A quad carrying a 512² checker of single texels (black and white), seen from far enough that
 // a pixel spans about 16 texels: each pixel's first-hit albedo is the checker's mean, 0.5, with
-// little spread between pixels. Read at level 0 (no mip-maps, a point footprint) each pixel's
-// one sample lands on one texel or between two: the albedo spreads over [0, 1].
-TEST(Texture, FarCheckerRendersToItsMean) {
+// little spread between pixels, by the path tracer and by the splat method's eye pass. Read at
+// level 0 (no mip-maps, a point footprint) each pixel's one sample lands on one texel or
+// between two: the albedo spreads over [0, 1].
+class FarChecker : public ::testing::TestWithParam<Method> {};
+
+TEST_P(FarChecker, RendersToItsMean) {
     Scene s;
     s.path = "far checker";
     const uint32_t m = test::addMaterial(s, MaterialKind::Lambert, Vec3(1.f));
@@ -135,9 +138,10 @@ TEST(Texture, FarCheckerRendersToItsMean) {
 
     RenderConfig cfg;
     cfg.output = "unused.exr";
-    cfg.method = Method::Path;
+    cfg.method = GetParam();
     cfg.width = cfg.height = 32;
     cfg.spp = 1;
+    cfg.directSpp = 1;
     cfg.passes = 1;
     cfg.threads = 1;
     const RenderResult r = render(s, cfg, silentReporter());
@@ -151,6 +155,9 @@ TEST(Texture, FarCheckerRendersToItsMean) {
     EXPECT_NEAR(mean, 0.5, 0.02);
     EXPECT_LT(sd, 0.03);
 }
+
+INSTANTIATE_TEST_SUITE_P(Texture, FarChecker, ::testing::Values(Method::Path, Method::Splat),
+                         [](const auto& info) { return std::string(methodName(info.param)); });
 
 }  // namespace
 }  // namespace rs
