@@ -87,13 +87,17 @@ void GltfLoader::decodeImage(int index, int srgbTexture, int linearTexture) {
     if (!pixels) fail(where + " cannot be decoded: " + stbi_failure_reason() + " (a truncated or corrupt file?)");
     std::vector<unsigned char>().swap(img.image);
 
+    // Level 0 of each texture, then the decoder's buffer goes, then the mip chains.
     const bool alpha = channels == 2 || channels == 4;
     auto build = [&](bool srgb) {
-        return sixteen ? Texture(where, width, height, static_cast<const uint16_t*>(pixels.get()), srgb, alpha)
-                       : Texture(where, width, height, static_cast<const uint8_t*>(pixels.get()), srgb, alpha);
+        return sixteen ? Texture(where, width, height, static_cast<const uint16_t*>(pixels.get()), srgb, alpha, false)
+                       : Texture(where, width, height, static_cast<const uint8_t*>(pixels.get()), srgb, alpha, false);
     };
     if (srgbTexture >= 0) scene_.textures[size_t(srgbTexture)] = build(true);
     if (linearTexture >= 0) scene_.textures[size_t(linearTexture)] = build(false);
+    pixels.reset();
+    for (int t : {srgbTexture, linearTexture})
+        if (t >= 0) scene_.textures[size_t(t)].buildMipChain();
 }
 
 }  // namespace rs::gltf

@@ -44,6 +44,16 @@ struct Srgb8 {
 };
 const Srgb8 kSrgb8;
 
+// 16-bit sRGB: the linear value of each code (256 KB, made on first use: 16-bit images are rare).
+const float* srgb16ToLinear() {
+    static const std::vector<float> table = [] {
+        std::vector<float> t(65536);
+        for (size_t k = 0; k < t.size(); ++k) t[k] = srgbToLinear(float(k) / 65535.f);
+        return t;
+    }();
+    return table.data();
+}
+
 // One channel value of type T (uint8_t or uint16_t) to linear and back; channel 3 is alpha.
 template <class T>
 struct Codec {
@@ -52,7 +62,7 @@ struct Codec {
     float decode(T v, int c) const {
         if (!srgb || c == 3) return float(v) / kMax;
         if constexpr (sizeof(T) == 1) return kSrgb8.toLinear[v];
-        return srgbToLinear(float(v) / kMax);
+        return srgb16ToLinear()[v];
     }
     T encode(float x, int c) const {
         x = std::clamp(x, 0.f, 1.f);
@@ -88,20 +98,25 @@ struct BoxTaps {
 
 }  // namespace
 
-Texture::Texture(std::string name_, int width, int height, const uint8_t* rgba, bool srgb, bool hasAlpha)
+Texture::Texture(std::string name_, int width, int height, const uint8_t* rgba, bool srgb, bool hasAlpha, bool withMips)
     : name(std::move(name_)), srgb_(srgb), hasAlpha_(hasAlpha) {
     layOutLevels(width, height);
     texels8_.resize(4 * (levels_.back().offset + 1));
     std::copy(rgba, rgba + 4 * size_t(width) * size_t(height), texels8_.begin());
-    buildMips(texels8_);
+    if (withMips) buildMipChain();
 }
 
-Texture::Texture(std::string name_, int width, int height, const uint16_t* rgba, bool srgb, bool hasAlpha)
+Texture::Texture(std::string name_, int width, int height, const uint16_t* rgba, bool srgb, bool hasAlpha, bool withMips)
     : name(std::move(name_)), srgb_(srgb), hasAlpha_(hasAlpha) {
     layOutLevels(width, height);
     texels16_.resize(4 * (levels_.back().offset + 1));
     std::copy(rgba, rgba + 4 * size_t(width) * size_t(height), texels16_.begin());
-    buildMips(texels16_);
+    if (withMips) buildMipChain();
+}
+
+void Texture::buildMipChain() {
+    if (texels16_.empty()) buildMips(texels8_);
+    else buildMips(texels16_);
 }
 
 // Each level half the one above (rounded down, at least 1) until 1 × 1.

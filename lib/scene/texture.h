@@ -19,9 +19,12 @@ public:
 
     Texture() = default;
     // Level 0 from interleaved RGBA texels (width × height × 4 values; grey and grey+alpha
-    // images expanded by the decoder), then the mip chain down to 1 × 1.
-    Texture(std::string name, int width, int height, const uint8_t* rgba, bool srgb, bool hasAlpha);
-    Texture(std::string name, int width, int height, const uint16_t* rgba, bool srgb, bool hasAlpha);
+    // images expanded by the decoder), then the mip chain down to 1 × 1. withMips false: the
+    // levels below 0 hold nothing until buildMipChain() (so that a decoder's buffer can be
+    // freed first).
+    Texture(std::string name, int width, int height, const uint8_t* rgba, bool srgb, bool hasAlpha, bool withMips = true);
+    Texture(std::string name, int width, int height, const uint16_t* rgba, bool srgb, bool hasAlpha, bool withMips = true);
+    void buildMipChain();
 
     int width() const { return levels_.empty() ? 0 : levels_[0].width; }
     int height() const { return levels_.empty() ? 0 : levels_[0].height; }
