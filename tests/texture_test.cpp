@@ -116,44 +116,68 @@ TEST(Texture, LodIsLog2OfTheTexelsAFootprintSpans) {
 // little spread between pixels, by the path tracer and by the splat method's eye pass. Read at
 // level 0 (no mip-maps, a point footprint) each pixel's one sample lands on one texel or
 // between two: the albedo spreads over [0, 1].
-class FarChecker : public ::testing::TestWithParam<Method> {};
+class FarChecker : public ::testing::TestWithParam<Method> {
+protected:
+    // The checker on the quad |x|, |y| ≤ 0.6 at z = zChecker, facing +z (or −z when `flipped`).
+    static Scene checkerScene(float zChecker, bool flipped) {
+        Scene s;
+        s.path = "far checker";
+        const uint32_t m = test::addMaterial(s, MaterialKind::Lambert, Vec3(1.f));
+        const int n = 512;
+        std::vector<uint8_t> rgba(4 * size_t(n) * size_t(n));
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                for (int c = 0; c < 4; ++c) rgba[4 * (size_t(y) * n + size_t(x)) + size_t(c)] = ((x + y) % 2 || c == 3) ? 255 : 0;
+        s.textures.push_back(Texture("checker", n, n, rgba.data(), true, false));
+        s.materials[m].baseColorTexture = 0;
+        const float z = zChecker, e = 0.6f;
+        if (flipped) test::addQuad(s, {-e, -e, z}, {-e, e, z}, {e, e, z}, {e, -e, z}, m);
+        else test::addQuad(s, {-e, -e, z}, {e, -e, z}, {e, e, z}, {-e, e, z}, m);
+        const Vec2 uv[6] = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}};
+        for (int i = 0; i < 6; ++i) s.uvs[size_t(i)] = uv[i];
+        return s;
+    }
+    // Renders the albedo at 32 × 32, one sample a pixel, from (0, 0, zCamera) looking down −z
+    // (yfov 0.5: a pixel spans 2·tan(0.25)/32 ≈ 0.016 rad, at 2.2 m 0.036 m ≈ 15 texels), and
+    // expects every pixel near the checker's mean.
+    static void expectMeanGrey(Scene& s, float zCamera, Method method) {
+        s.cameras.push_back(test::lookAt({0, 0, zCamera}, {0, 0, 0}, {0, 1, 0}, 0.5f));
+        s.computeBounds();
+        RenderConfig cfg;
+        cfg.output = "unused.exr";
+        cfg.method = method;
+        cfg.width = cfg.height = 32;
+        cfg.spp = 1;
+        cfg.directSpp = 1;
+        cfg.passes = 1;
+        cfg.threads = 1;
+        const RenderResult r = render(s, cfg, silentReporter());
+        double sum = 0.0, sumSq = 0.0;
+        for (const Vec3& a : r.film.albedo) {
+            sum += a.x;
+            sumSq += double(a.x) * a.x;
+        }
+        const double count = double(r.film.albedo.size()), mean = sum / count;
+        const double sd = std::sqrt(std::max(0.0, sumSq / count - mean * mean));
+        EXPECT_NEAR(mean, 0.5, 0.02);
+        EXPECT_LT(sd, 0.03);
+    }
+};
 
 TEST_P(FarChecker, RendersToItsMean) {
-    Scene s;
-    s.path = "far checker";
-    const uint32_t m = test::addMaterial(s, MaterialKind::Lambert, Vec3(1.f));
-    const int n = 512;
-    std::vector<uint8_t> rgba(4 * size_t(n) * size_t(n));
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            for (int c = 0; c < 4; ++c) rgba[4 * (size_t(y) * n + size_t(x)) + size_t(c)] = ((x + y) % 2 || c == 3) ? 255 : 0;
-    s.textures.push_back(Texture("checker", n, n, rgba.data(), true, false));
-    s.materials[m].baseColorTexture = 0;
-    test::addQuad(s, {-0.6f, -0.6f, 0.f}, {0.6f, -0.6f, 0.f}, {0.6f, 0.6f, 0.f}, {-0.6f, 0.6f, 0.f}, m);
-    const Vec2 uv[6] = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}};
-    for (int i = 0; i < 6; ++i) s.uvs[size_t(i)] = uv[i];
-    // yfov 0.5 at 32 px: a pixel spans 2·tan(0.25)/32 ≈ 0.016 rad, at 2.2 m 0.036 m ≈ 15 texels.
-    s.cameras.push_back(test::lookAt({0, 0, 2.2f}, {0, 0, 0}, {0, 1, 0}, 0.5f));
-    s.computeBounds();
+    Scene s = checkerScene(0.f, false);
+    expectMeanGrey(s, 2.2f, GetParam());
+}
 
-    RenderConfig cfg;
-    cfg.output = "unused.exr";
-    cfg.method = GetParam();
-    cfg.width = cfg.height = 32;
-    cfg.spp = 1;
-    cfg.directSpp = 1;
-    cfg.passes = 1;
-    cfg.threads = 1;
-    const RenderResult r = render(s, cfg, silentReporter());
-    double sum = 0.0, sumSq = 0.0;
-    for (const Vec3& a : r.film.albedo) {
-        sum += a.x;
-        sumSq += double(a.x) * a.x;
-    }
-    const double count = double(r.film.albedo.size()), mean = sum / count;
-    const double sd = std::sqrt(std::max(0.0, sumSq / count - mean * mean));
-    EXPECT_NEAR(mean, 0.5, 0.02);
-    EXPECT_LT(sd, 0.03);
+// The same checker seen in a mirror (z = 0, facing the camera at z = 1.1; the checker just
+// behind the camera, facing the mirror): the cone keeps widening past the mirror, 2.25 m in all.
+TEST_P(FarChecker, SeenInAMirrorRendersToItsMean) {
+    Scene s = checkerScene(1.15f, true);
+    const uint32_t mirror = test::addMaterial(s, MaterialKind::Mirror, Vec3(1.f));
+    s.materials[mirror].metallic = 1.f;
+    s.materials[mirror].roughness = 0.f;
+    test::addQuad(s, {-0.6f, -0.6f, 0.f}, {0.6f, -0.6f, 0.f}, {0.6f, 0.6f, 0.f}, {-0.6f, 0.6f, 0.f}, mirror);
+    expectMeanGrey(s, 1.1f, GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(Texture, FarChecker, ::testing::Values(Method::Path, Method::Splat),
