@@ -102,6 +102,28 @@ TEST(Texture, EightBitSrgbDecodesByTheFormula) {
     }
 }
 
+// A mip texel is the 8-bit code nearest to its linear value: for every pair of codes (a, b) side
+// by side, the level below holds the code whose linear value is nearest to the pair's mean,
+// found here by trying all 256 (either of two codes equally near).
+TEST(Texture, MipTexelsRoundToTheNearestCode) {
+    for (bool srgb : {true, false}) {
+        std::vector<uint8_t> rgba(4 * 256);
+        for (int k = 0; k < 256; ++k) rgba[size_t(4 * k)] = uint8_t(k);
+        const Texture ramp("ramp", 256, 1, rgba.data(), srgb, false);
+        rgba.assign(4 * 512, 0);
+        for (int a = 0; a < 256; ++a) {
+            for (int b = 0; b < 256; ++b) rgba[size_t(8 * b)] = uint8_t(a), rgba[size_t(8 * b + 4)] = uint8_t(b);
+            const Texture pairs("pairs", 512, 1, rgba.data(), srgb, false);
+            for (int b = 0; b < 256; ++b) {
+                const float mean = 0.5f * ramp.texel(0, a, 0).x + 0.5f * ramp.texel(0, b, 0).x;
+                float best = 2.f;
+                for (int k = 0; k < 256; ++k) best = std::min(best, std::abs(ramp.texel(0, k, 0).x - mean));
+                ASSERT_LE(std::abs(pairs.texel(1, b, 0).x - mean), best + 1e-7f) << "srgb " << srgb << " codes " << a << ", " << b;
+            }
+        }
+    }
+}
+
 // lodOf: a footprint as wide as one texel is level 0, 2^k texels is level k.
 TEST(Texture, LodIsLog2OfTheTexelsAFootprintSpans) {
     const std::vector<uint8_t> rgba(4 * 256 * 256, 128);

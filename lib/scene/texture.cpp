@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "core/error.h"
 
@@ -25,21 +26,24 @@ namespace {
 struct Srgb8 {
     static constexpr int kBuckets = 4096;
     std::array<float, 256> toLinear;
-    std::array<float, 255> midpoint;
-    // The code of the bucket's lowest value, x in [k, k + 1) / kBuckets: encode() starts there and
-    // steps past the (at most two) midpoints inside the bucket.
+    std::array<float, 256> unit;      // code / 255: alpha and data
+    std::array<float, 256> midpoint;  // [255]: infinity
+    // The code of the bucket's lowest value, x in [k, k + 1) / kBuckets. A bucket (1/4096) is
+    // narrower than the closest two midpoints (1/(255 · 12.92) apart, near 0), so x lies past at
+    // most one more midpoint than the bucket's start.
     std::array<uint8_t, kBuckets + 1> bucketStart;
     Srgb8() {
         for (int k = 0; k < 256; ++k) toLinear[size_t(k)] = srgbToLinear(float(k) / 255.f);
+        for (int k = 0; k < 256; ++k) unit[size_t(k)] = float(k) / 255.f;
         for (int k = 0; k < 255; ++k) midpoint[size_t(k)] = 0.5f * (toLinear[size_t(k)] + toLinear[size_t(k) + 1]);
+        midpoint[255] = std::numeric_limits<float>::infinity();
         for (int k = 0; k <= kBuckets; ++k)
             bucketStart[size_t(k)] = uint8_t(std::upper_bound(midpoint.begin(), midpoint.end(), float(k) / kBuckets) - midpoint.begin());
     }
     // The code whose linear value is nearest to x in [0, 1] (the number of midpoints ≤ x).
     uint8_t encode(float x) const {
-        int code = bucketStart[size_t(x * float(kBuckets))];
-        while (code < 255 && midpoint[size_t(code)] <= x) ++code;
-        return uint8_t(code);
+        const int code = bucketStart[size_t(x * float(kBuckets))];
+        return uint8_t(code + (midpoint[size_t(code)] <= x ? 1 : 0));
     }
 };
 const Srgb8 kSrgb8;
@@ -60,8 +64,8 @@ struct Codec {
     static constexpr float kMax = float((1u << (8 * sizeof(T))) - 1u);
     bool srgb;
     float decode(T v, int c) const {
+        if constexpr (sizeof(T) == 1) return !srgb || c == 3 ? kSrgb8.unit[v] : kSrgb8.toLinear[v];
         if (!srgb || c == 3) return float(v) / kMax;
-        if constexpr (sizeof(T) == 1) return kSrgb8.toLinear[v];
         return srgb16ToLinear()[v];
     }
     T encode(float x, int c) const {
@@ -195,8 +199,8 @@ Vec4 Texture::texel(int level, int x, int y) const {
         return Vec4(codec.decode(p[0], 0), codec.decode(p[1], 1), codec.decode(p[2], 2), codec.decode(p[3], 3));
     }
     const uint8_t* p = &texels8_[i];
-    if (srgb_) return Vec4(kSrgb8.toLinear[p[0]], kSrgb8.toLinear[p[1]], kSrgb8.toLinear[p[2]], float(p[3]) / 255.f);
-    return Vec4(float(p[0]) / 255.f, float(p[1]) / 255.f, float(p[2]) / 255.f, float(p[3]) / 255.f);
+    const auto& colour = srgb_ ? kSrgb8.toLinear : kSrgb8.unit;
+    return Vec4(colour[p[0]], colour[p[1]], colour[p[2]], kSrgb8.unit[p[3]]);
 }
 
 Vec4 Texture::bilinear(int level, Vec2 uv) const {
