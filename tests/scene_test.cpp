@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include <stb/stb_image_write.h>
 #include <zlib.h>
 
 #include "core/error.h"
@@ -1062,4 +1063,36 @@ TEST(Loader, ImagesDecodeAlikeOnAnyThreadCountAndSixteenBitsStay) {
             EXPECT_EQ(t.w, float(greyAlphaValue(x, y, 1)) / 255.f);
             EXPECT_EQ(grey.alphaAt(y * 4 + x), t.w);
         }
+}
+
+// A JPEG texture (written by stb_image_write at quality 100, one colour): read as 8-bit sRGB
+// without alpha, every texel within two codes of the colour written.
+TEST(Loader, JpegTexture) {
+    TempDir dir;
+    GltfBuilder g;
+    const int painted = g.material("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}");
+    g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}),
+                                                                        -1, kTriangles, painted)})));
+    g.extra("\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"wall.jpg\"}]");
+    const uint8_t colour[3] = {200, 100, 50};
+    std::vector<uint8_t> rgb(16 * 16 * 3);
+    for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = colour[i % 3];
+    std::string jpeg;
+    stbi_write_jpg_to_func([](void* out, void* data, int size) { static_cast<std::string*>(out)->append(static_cast<char*>(data), size_t(size)); },
+                           &jpeg, 16, 16, 3, rgb.data(), 100);
+    ASSERT_GT(jpeg.size(), 100u);
+    writeFile(dir.file("wall.jpg"), jpeg);
+    const Scene s = loadScene(g.write(dir, "jpeg"), silentReporter());
+    ASSERT_EQ(s.textures.size(), 1u);
+    const Texture& t = s.textures[0];
+    EXPECT_EQ(t.width(), 16);
+    EXPECT_FALSE(t.sixteenBit());
+    EXPECT_FALSE(t.hasAlpha());
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float v = t.texel(0, x, y)[c];
+                EXPECT_GE(v, srgbToLinear((colour[c] - 2) / 255.f)) << x << "," << y << "," << c;
+                EXPECT_LE(v, srgbToLinear((colour[c] + 2) / 255.f)) << x << "," << y << "," << c;
+            }
 }
