@@ -1096,3 +1096,26 @@ TEST(Loader, JpegTexture) {
                 EXPECT_LE(v, srgbToLinear((colour[c] + 2) / 255.f)) << x << "," << y << "," << c;
             }
 }
+
+// An image in a bufferView (as in a .glb) reads as the same image in a file beside the glTF.
+TEST(Loader, ImageInABufferViewReadsAsTheFile) {
+    TempDir dir;
+    const std::string png = pngFile(4, 4, 4, 8, [](int x, int y, int c) { return unsigned(x * 50 + y * 13 + c * 7); });
+    writeFile(dir.file("rgba.png"), png);
+    auto sceneWith = [&](bool inBuffer) {
+        GltfBuilder g;
+        const int painted = g.material("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}");
+        g.node("\"mesh\":" + std::to_string(g.mesh({GltfBuilder::primitive(g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}),
+                                                                            -1, kTriangles, painted)})));
+        // The builder makes a bufferView with each accessor: the image uses the PNG's.
+        const int view = inBuffer ? g.accessor(png, kUByte, int(png.size()), "SCALAR") : -1;
+        g.extra("\"textures\":[{\"source\":0}],\"images\":[" +
+                (inBuffer ? "{\"bufferView\":" + std::to_string(view) + ",\"mimeType\":\"image/png\"}" : std::string("{\"uri\":\"rgba.png\"}")) + "]");
+        return loadScene(g.write(dir, inBuffer ? "in_buffer" : "in_file"), silentReporter());
+    };
+    const Scene file = sceneWith(false), buffer = sceneWith(true);
+    ASSERT_EQ(buffer.textures.size(), 1u);
+    ASSERT_EQ(buffer.textures[0].width(), 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) EXPECT_EQ(buffer.textures[0].texel(0, x, y), file.textures[0].texel(0, x, y));
+}
