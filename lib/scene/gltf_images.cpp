@@ -35,9 +35,20 @@ void GltfLoader::decodeImages() {
         (key.second ? tasks.back().srgbTexture : tasks.back().linearTexture) = texture;
     }
     if (!tasks.empty()) {
+        // An image in flight holds its decoder's output beside its texture (then the level above
+        // in floats while the mips are made): no more images at once than hold a third of all
+        // the images' decoded bytes, whatever the thread count (at least one).
+        size_t total = 0, largest = 0;
+        for (const Task& t : tasks) {
+            const size_t b = decodedBytes(t.image);
+            total += b;
+            largest = std::max(largest, b);
+        }
+        int threads = std::min(threads_ > 0 ? threads_ : ThreadPool::hardwareThreads(), int(tasks.size()));
+        if (largest > 0) threads = std::clamp(int(total / 3 / largest), 1, threads);
         // Every task runs; the error reported is the first image's, whatever the thread count.
         std::vector<std::exception_ptr> errors(tasks.size());
-        ThreadPool pool(std::min(threads_ > 0 ? threads_ : ThreadPool::hardwareThreads(), int(tasks.size())));
+        ThreadPool pool(threads);
         pool.parallelFor(int64_t(tasks.size()), 1, [&](int64_t begin, int64_t end, int) {
             for (int64_t i = begin; i < end; ++i) {
                 try {
@@ -54,11 +65,8 @@ void GltfLoader::decodeImages() {
     for (tinygltf::Image& img : model_.images) std::vector<unsigned char>().swap(img.image);
 }
 
-void GltfLoader::decodeImage(int index, int srgbTexture, int linearTexture) {
-    tinygltf::Image& img = model_.images[size_t(index)];
-    const std::string where = scene_.textures[size_t(srgbTexture >= 0 ? srgbTexture : linearTexture)].name;
-
-    // The encoded bytes: the file's (kept by keepEncodedImage) or the bufferView's.
+std::pair<const unsigned char*, size_t> GltfLoader::encodedBytes(const tinygltf::Image& img, const std::string& where) const {
+    // The file's bytes (kept by keepEncodedImage) or the bufferView's.
     const unsigned char* bytes = img.image.data();
     size_t size = img.image.size();
     if (img.bufferView >= 0) {
@@ -72,6 +80,25 @@ void GltfLoader::decodeImage(int index, int srgbTexture, int linearTexture) {
     }
     if (size == 0) fail(where + " has zero size");
     if (size > size_t(INT_MAX)) fail(where + " is larger than 2 GB");
+    return {bytes, size};
+}
+
+size_t GltfLoader::decodedBytes(int index) const {
+    try {
+        const auto [bytes, size] = encodedBytes(model_.images[size_t(index)], "");
+        int width = 0, height = 0, channels = 0;
+        if (!stbi_info_from_memory(bytes, int(size), &width, &height, &channels)) return 0;
+        return size_t(std::max(width, 0)) * size_t(std::max(height, 0)) * 4 * (stbi_is_16_bit_from_memory(bytes, int(size)) ? 2 : 1);
+    } catch (const Error&) {
+        return 0;  // decodeImage reports it
+    }
+}
+
+void GltfLoader::decodeImage(int index, int srgbTexture, int linearTexture) {
+    tinygltf::Image& img = model_.images[size_t(index)];
+    const std::string where = scene_.textures[size_t(srgbTexture >= 0 ? srgbTexture : linearTexture)].name;
+
+    const auto [bytes, size] = encodedBytes(img, where);
 
     // Decode to RGBA (grey and grey+alpha expanded), 8 or 16 bits as the file has it.
     int width = 0, height = 0, channels = 0;

@@ -10,6 +10,7 @@
 #include <tiny_gltf.h>
 
 #include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,10 @@ private:
     // encoded copy once its textures are built.
     void decodeImages();
     void decodeImage(int image, int srgbTexture, int linearTexture);
+    // An image's encoded bytes, from the file or its bufferView (checked against its buffer).
+    std::pair<const unsigned char*, size_t> encodedBytes(const tinygltf::Image& image, const std::string& where) const;
+    // Its RGBA size once decoded, from the header; 0 where the header cannot be read.
+    size_t decodedBytes(int image) const;
     // -- Accessors and meshes (gltf_meshes.cpp)
     // Reads accessor `index` as `n` floats per element (normalized integers become [0,1]),
     // checking every byte it touches lies inside its buffer.
