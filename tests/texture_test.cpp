@@ -162,8 +162,12 @@ protected:
     // Renders the albedo at 32 × 32, one sample a pixel, from (0, 0, zCamera) looking down −z
     // (yfov 0.5: a pixel spans 2·tan(0.25)/32 ≈ 0.016 rad, at 2.2 m 0.036 m ≈ 15 texels), and
     // expects every pixel near the checker's mean.
-    static void expectMeanGrey(Scene& s, float zCamera, Method method) {
+    static void expectMeanGrey(Scene& s, float zCamera, Method method, bool orthographic = false) {
         s.cameras.push_back(test::lookAt({0, 0, zCamera}, {0, 0, 0}, {0, 1, 0}, 0.5f));
+        if (orthographic) {
+            s.cameras.back().projection = Projection::Orthographic;
+            s.cameras.back().ymag = 0.55f;  // a pixel 1.1 m / 32 wide: 15 texels
+        }
         s.computeBounds();
         RenderConfig cfg;
         cfg.output = "unused.exr";
@@ -189,6 +193,13 @@ protected:
 TEST_P(FarChecker, RendersToItsMean) {
     Scene s = checkerScene(0.f, false);
     expectMeanGrey(s, 2.2f, GetParam());
+}
+
+// An orthographic camera's rays are as wide as a pixel of its view and do not spread: 0.1 m
+// away (where a pinhole's pixel would span 0.7 texels: level 0) a pixel still spans 15.
+TEST_P(FarChecker, OrthographicViewRendersToItsMean) {
+    Scene s = checkerScene(0.f, false);
+    expectMeanGrey(s, 0.1f, GetParam(), true);
 }
 
 // The same checker seen in a mirror (z = 0, facing the camera at z = 1.1; the checker just
