@@ -109,7 +109,8 @@ void addQuietOption(Command& cmd, Arguments& args) {
     cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { args.quiet = true; }});
     cmd.add({"--progress", "FORMAT",
              "text (default: a bar on a terminal, else lines), json (one JSON object a line on stderr: "
-             "{\"event\": \"begin\"|\"progress\"|\"end\"|\"info\"|\"warning\"|\"done\", ...}, for programs; "
+             "{\"event\": \"begin\"|\"progress\"|\"end\"|\"info\"|\"warning\"|\"frame\"|\"done\", ...}, for programs; "
+             "with --frames, the events of a frame carry \"frame\": N; "
              "an error stays the one line 'raysplat: error: ...')",
              [&](const std::string& v) {
                  if (v != "text" && v != "json") throw Error(ErrorKind::Config, "--progress " + v + ": unknown format (text, json)");
@@ -216,7 +217,7 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
                                   ", each new eye samples and photons; path " + std::to_string(d.path.passCount()) +
                                   " of --spp; 0: the method's)",
              [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
-    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
+    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes; with --frames, each frame's time",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
     cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(d.splat.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
