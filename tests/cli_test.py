@@ -866,6 +866,47 @@ def interrupt(case, signals, delay, command="render"):
         MESSAGES.append((case, command, "%s (stopped %.2f s after the signal)" % (lines[0], stopped)))
 
 
+def test_a_stopped_walkthrough_leaves_whole_frames():
+    """SIGTERM while frame 2 of 0-40 renders: exit 143, the frames done before it whole (their EXRs
+    parse, named by their frame) and nothing else: no temporary, no part of frame 2."""
+    import signal as sig
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_sig_") as out:
+        args = [a for a in walk_args("-o", os.path.join(out, "walk_####.exr"), "--frames", "0-40") if a != "--quiet"]
+        p = subprocess.Popen([RAYSPLAT, *args, "--progress", "json"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, errors="replace")
+        for line in p.stderr:
+            event = json.loads(line)
+            if event["event"] == "begin" and event.get("frame") == 2:
+                p.send_signal(sig.SIGTERM)
+                break
+        try:
+            p.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise Failure("still running 30 s after the signal")
+        check(p.returncode == 128 + sig.SIGTERM, "exit %d, expected %d" % (p.returncode, 128 + sig.SIGTERM))
+        left = sorted(os.listdir(out))
+        check(left == ["walk_0000.exr", "walk_0001.exr"], "the folder holds %s" % left)
+        for name in left:
+            with open(os.path.join(out, name), "rb") as f:
+                check(len(exr_pixel_chunks(f.read())) > 0, "%s is not a whole EXR" % name)
+
+
+def test_morph_targets_warn_once_and_render_the_rest_pose():
+    """A morph target weights channel beside a translation: one warning naming morph targets,
+    the frame rendered."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        doc = animated_gltf()
+        doc["animations"][0]["channels"].append({"sampler": 0, "target": {"node": 0, "path": "weights"}})
+        scene = write_json(os.path.join(out, "morph.gltf"), doc)
+        r = run("render", scene, "-o", os.path.join(out, "m.exr"), "--frames", "0-1", "--width", "16", "--spp", "1",
+                "--passes", "1", "--photons", "1000", "--sky", "1", "--quiet")
+        check(r.returncode == 0, "render failed: %s" % r.stderr)
+        warnings = [l for l in r.stderr.splitlines() if "morph targets" in l]
+        check(len(warnings) == 1 and "rest pose" in warnings[0], "warnings: %r" % r.stderr)
+        check(sorted(os.listdir(out)) == ["m_0000.exr", "m_0001.exr", "morph.gltf"], "outputs: %s" % os.listdir(out))
+
+
 def interrupt_tests():
     import signal as sig
     return [
@@ -907,6 +948,8 @@ def main():
             test_frames_are_numbered_and_skip_existing_continues,
             test_frame_alone_equals_frame_in_range,
             test_progress_json_carries_the_frame_and_info_lists_animations,
+            test_a_stopped_walkthrough_leaves_whole_frames,
+            test_morph_targets_warn_once_and_render_the_rest_pose,
         )]
         for name, test in tests:
             try:
