@@ -6,8 +6,8 @@
 // render.cpp's PreparedScene builds from it (threads, BVH, lights), each frame changing only the
 // camera; otherwise each frame loads and flattens its own pose. Each frame's passes use the
 // render's seed, not the frame's place in the range: frame f is the same image alone or in any
-// range, and where only the camera moves every frame's photons are the same photons. The next
-// step keeps those photons themselves, beside the setup the Walkthrough holds for the range.
+// range, and where only the camera moves every frame's photons are the same photons. They depend
+// on the scene, not on the camera: a range that keeps them keeps them beside prepared_.
 #pragma once
 
 #include <memory>
@@ -55,8 +55,7 @@ private:
     std::vector<int> selected_;  // the animations that play
     bool camerasOnly_ = true;
     int cameraIndex_ = -1;  // the rendered camera in Scene::cameras; -1: the framing camera
-    // The range's state, kept from frame to frame where only cameras move: the scene's setup
-    // now; the photons of every pass next (they depend on the scene, not on the camera).
+    // The range's state, kept from frame to frame where only cameras move: the scene's setup.
     std::unique_ptr<PreparedScene> prepared_;
 };
 
