@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/stop.h"
 #include "render_context.h"
+#include "splat_pass.h"
 
 namespace rs {
 
@@ -44,6 +45,7 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
     const SceneAnimation& animation = rest_.animation;
     selected_ = animation.select(cfg.animation, cfg.scene);
     camerasOnly_ = animation.movesOnlyCameras(selected_);
+    if (camerasOnly_ && cfg.splats()) store_ = std::make_unique<PhotonStore>();
     // The camera `camera` picks (it throws naming it when there is none), found in the file's list.
     const Camera chosen = rest_.camera(cfg.camera);
     for (int i = 0; i < int(rest_.cameras.size()) && cameraIndex_ < 0; ++i) {
@@ -83,9 +85,9 @@ RenderResult Walkthrough::renderFrame(int frame) {
     const std::vector<Mat4> pose = rest_.animation.pose(selected_, t);
     RenderResult result;
     if (camerasOnly_) {
-        // The scene as loaded: only the camera is posed.
+        // The scene as loaded and the photons of the frames before: only the camera is posed.
         if (!prepared_) prepared_ = std::make_unique<PreparedScene>(rest_, cfg_, reporter_, ranks_);
-        result = prepared_->render(cameraAt(pose));
+        result = prepared_->render(cameraAt(pose), store_.get());
     } else {
         // Meshes or lights move: the frame's own scene, flattened as posed (its warnings were the
         // rest scene's).

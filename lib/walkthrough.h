@@ -2,12 +2,12 @@
 // of the file's animations, frame n posed at time n / fps (scene/animation.h), each rendered as
 // a still of its pose and written to its own outputs as soon as it is done.
 //
-// What is kept across the range: with only cameras moving, the scene as loaded and everything
-// render.cpp's PreparedScene builds from it (threads, BVH, lights), each frame changing only the
-// camera; otherwise each frame loads and flattens its own pose. Each frame's passes use the
-// render's seed, not the frame's place in the range: frame f is the same image alone or in any
-// range, and where only the camera moves every frame's photons are the same photons. They depend
-// on the scene, not on the camera: a range that keeps them keeps them beside prepared_.
+// What is kept across the range: with only cameras moving, the scene as loaded, everything
+// render.cpp's PreparedScene builds from it (threads, BVH, lights) and, for the splat methods,
+// every pass's photons (PhotonStore, docs/design.md §12), each frame changing only the camera;
+// otherwise each frame loads and flattens its own pose. Each frame's passes use the render's
+// seed, not the frame's place in the range, and a frame rendered alone has a store of its own:
+// frame f is the same image alone or in any range.
 #pragma once
 
 #include <memory>
@@ -55,8 +55,10 @@ private:
     std::vector<int> selected_;  // the animations that play
     bool camerasOnly_ = true;
     int cameraIndex_ = -1;  // the rendered camera in Scene::cameras; -1: the framing camera
-    // The range's state, kept from frame to frame where only cameras move: the scene's setup.
+    // The range's state, kept from frame to frame where only cameras move: the scene's setup
+    // and the photons of every pass.
     std::unique_ptr<PreparedScene> prepared_;
+    std::unique_ptr<PhotonStore> store_;
 };
 
 }  // namespace rs

@@ -145,7 +145,7 @@ TEST(Animation, ParentChainPosesChildrenAsHandComputed) {
     ASSERT_EQ(a.animations.size(), 1u);
     EXPECT_FALSE(a.movesOnlyCameras({0}));  // the triangle rides on the rig
     const std::vector<Mat4> pose = a.pose({0}, 0.5f);
-    const Scene posed = loadScene(path, silentReporter(), &pose);
+    const Scene posed = loadScene(path, silentReporter(), 0, &pose);
     // At t = 0.5 the rig stands at (1,0,0) turned 45 degrees about +Y: a point 1 m along its +Z is
     // at (1 + sin 45, 0, cos 45), and the camera looks along the turned −Z, (−sin 45, 0, −cos 45).
     const float s = std::sqrt(0.5f);
@@ -177,7 +177,7 @@ TEST(Animation, WalkthroughCameraEqualsTheLoadersPosedCameraBitForBit) {
     EXPECT_TRUE(a.movesOnlyCameras({0}));
     for (float t : {0.f, 0.3f, 0.77f, 2.f}) {
         const std::vector<Mat4> pose = a.pose({0}, t);
-        const Scene posed = loadScene(path, silentReporter(), &pose);
+        const Scene posed = loadScene(path, silentReporter(), 0, &pose);
         const Camera placed = placeCamera(rest.cameras[0], a.worldFrom(a.cameraNode[0], pose));
         const Camera& loaded = posed.cameras[0];
         for (int k = 0; k < 3; ++k) {
@@ -189,7 +189,7 @@ TEST(Animation, WalkthroughCameraEqualsTheLoadersPosedCameraBitForBit) {
     }
     // With no pose the loader's nodes are the rest pose's: pose() reproduces the file.
     const std::vector<Mat4> restPose = a.pose({}, 0.f);
-    const Scene again = loadScene(path, silentReporter(), &restPose);
+    const Scene again = loadScene(path, silentReporter(), 0, &restPose);
     EXPECT_EQ(again.positions, rest.positions);
     EXPECT_EQ(again.cameras[0].position, rest.cameras[0].position);
 }
@@ -219,9 +219,9 @@ bool sameFilm(const Film& a, const Film& b) {
 }
 
 TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
-    // Whether only the camera moves (the scene loaded once, the BVH kept) or a mesh rides on the
-    // rig (each frame loaded as posed), frame f is bit for bit the still of the file posed at
-    // f / fps; the frames differ from each other.
+    // Whether only the camera moves (the scene loaded once, the BVH and the photons kept) or a
+    // mesh rides on the rig (each frame loaded as posed), frame f is bit for bit the still of the
+    // file posed at f / fps; the frames differ from each other.
     for (bool meshChild : {false, true}) {
         TempDir dir;
         const std::string path = writeRigScene(dir, meshChild);
@@ -234,11 +234,13 @@ TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
         for (int frame : {6, 12}) {
             RenderResult r = walk.renderFrame(frame);
             const std::vector<Mat4> pose = walk.restScene().animation.pose({0}, float(frame) / cfg.fps);
-            const Scene posed = loadScene(path, silentReporter(), &pose);
+            const Scene posed = loadScene(path, silentReporter(), 0, &pose);
             const RenderResult expected = render(posed, still, silentReporter());
             EXPECT_TRUE(sameFilm(r.film, expected.film)) << "frame " << frame << (meshChild ? ", mesh moving" : ", camera only");
-            // The setup is kept across frames only where only the camera moves.
+            // The setup and the photons are kept across frames only where only the camera moves:
+            // the one pass's photons traced once, for frame 6.
             EXPECT_EQ(r.stats.count("bvh_reused"), meshChild || frame == 6 ? 0.0 : 1.0);
+            EXPECT_EQ(r.stats.count("photon_passes_traced"), meshChild ? 0.0 : 1.0);
             frames.push_back(std::move(r.film));
         }
         EXPECT_FALSE(sameFilm(frames[0], frames[1]));

@@ -44,7 +44,7 @@ void loadGltf(const uint8_t* data, size_t size) {
                 for (size_t c = 0; c < scene.cameras.size(); ++c) placeCamera(scene.cameras[c], a.worldFrom(a.cameraNode[c], pose));
             }
             const std::vector<Mat4> pose = a.pose(all, 0.5f * (start + end));
-            loadScene(path, silentReporter(), &pose);
+            loadScene(path, silentReporter(), 0, &pose);
         }
     } catch (const Error&) {
     }
