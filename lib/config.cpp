@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "grid/occlusion_grid.h"
@@ -145,6 +146,14 @@ void RenderConfig::validateFrames() const {
     if (lastFrame > kMaxFrame) throw Error(ErrorKind::Config, "`frames` " + range + ": frames go up to " + std::to_string(kMaxFrame));
     if (!vdb.empty()) throw Error(ErrorKind::Config, "`vdb` writes one grid: not with `frames`");
     if (replays()) throw Error(ErrorKind::Config, "`photon` replays a ray of a still: not with `frames`");
+    // A walkthrough writes for a long time: refuse a folder it cannot write to before its first frame.
+    for (const std::string* f : {&output, &png, &statsJson}) {
+        const std::filesystem::path dir = std::filesystem::path(*f).parent_path();
+        std::error_code ec;
+        const std::string d = dir.empty() ? "." : dir.string();
+        if (!f->empty() && std::filesystem::is_directory(d, ec) && access(d.c_str(), W_OK) != 0)
+            throw Error(ErrorKind::Io, *f + ": directory " + d + " cannot be written");
+    }
 }
 
 int RenderConfig::maxPasses() const {

@@ -313,7 +313,13 @@ def bad_frames_tests(tmp):
         return name, test
 
     missing = os.path.join("no_such_dir", "walk_####.exr")
-    return [
+    read_only = os.path.join(tmp, "read_only")
+    os.makedirs(read_only, exist_ok=True)
+    os.chmod(read_only, 0o500)
+    unwritable = [] if os.geteuid() == 0 else [  # root writes anywhere
+        case("-o pattern in a read-only directory", ["--frames", "1-2", "-o", os.path.join(read_only, "w_####.exr")],
+             "read_only", "cannot be written")]
+    return unwritable + [
         case("--frames reversed", ["--frames", "5-2"], "--frames 5-2", "reversed"),
         case("--frames negative", ["--frames", "-3"], "--frames -3", "negative"),
         case("--frames negative end", ["--frames", "2--3"], "--frames", "negative"),
