@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdarg>
@@ -26,6 +27,7 @@
 #include "options.h"
 #include "reporters.h"
 #include "render.h"
+#include "walkthrough.h"
 #include "scene/scene.h"
 #include "core/stats.h"
 #include "core/simd.h"
@@ -88,6 +90,13 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
     if (!root) cfg.vdb.clear();
     std::unique_ptr<Reporter> console = cli::makeReporter(args.quiet, args.json);
     Reporter& reporter = root ? *console : silentReporter();
+    if (cfg.walkthrough()) {
+        Timer run;
+        const int rendered = Walkthrough(cfg, reporter, ranks).run();
+        reporter.info(fmt("%d of %d frames rendered, %.2f s", rendered, cfg.lastFrame - cfg.firstFrame + 1, run.seconds()));
+        if (root) cli::reportDone(args.json, cfg.output, run.seconds());
+        return 0;
+    }
     Timer load;
     Scene scene = loadScene(cfg.scene, reporter, cfg.threads);
     double loadSeconds = load.seconds();
@@ -103,10 +112,35 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
     return 0;
 }
 
+// Each animation: its name, the nodes and paths it moves, its time range and frames at `fps`.
+void printAnimations(const SceneAnimation& a, float fps) {
+    if (!(fps > 0.f && fps <= 1000.f)) throw Error(ErrorKind::Config, fmt("--fps %g is out of range (0.001..1000)", fps));
+    if (!a.animated()) return;
+    std::printf("animations  %zu, frames at %g fps%s\n", a.animations.size(), fps,
+                a.unsupported.empty() ? "" : (" (" + a.unsupported + " not animated: rest pose)").c_str());
+    for (size_t i = 0; i < a.animations.size(); ++i) {
+        const Animation& anim = a.animations[i];
+        // Paths by node, in the order the channels name them.
+        std::vector<std::pair<int, std::string>> moved;
+        for (const AnimationChannel& c : anim.channels) {
+            auto it = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == c.node; });
+            if (it == moved.end()) moved.push_back({c.node, animatedPathName(c.path)});
+            else it->second += std::string(", ") + animatedPathName(c.path);
+        }
+        std::string nodes;
+        for (const auto& [node, paths] : moved) nodes += (nodes.empty() ? "" : "; ") + a.nodeNames[node] + " " + paths;
+        std::printf("  %zu '%s': %.4g to %.4g s, frames %ld-%ld: %s\n", i, anim.name.c_str(), anim.start, anim.end,
+                    std::lround(anim.start * fps), std::lround(anim.end * fps), nodes.empty() ? "no channels" : nodes.c_str());
+    }
+}
+
 int cmdInfo(int argc, char** argv) {
     bool gpu = false;
     Command cmd("raysplat info SCENE", "Loads SCENE and prints what the renderer sees in it.");
     cmd.add({"--gpu", "", "also report the EGL device the GPU voxelizer would use (--voxelizer auto uses it when it is hardware)", [&](const std::string&) { gpu = true; }});
+    float fps = RenderConfig{}.fps;
+    cmd.add({"--fps", "F", "frames a second the animations' frames are counted at (default " + numberText(fps) + ")",
+             [&](const std::string& v) { fps = cli::parseFloat("--fps", v); }});
     bool help;
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
     if (help) return 0;
@@ -150,6 +184,7 @@ int cmdInfo(int argc, char** argv) {
     for (size_t i = 0; i < s.cameras.size(); ++i)
         std::printf("camera %-4zu %s%s\n", i, describe(s.cameras[i]).c_str(), i == 0 ? " (the default)" : "");
     std::printf("bounds      %s to %s (m)\n", vec(s.bounds.lo).c_str(), vec(s.bounds.hi).c_str());
+    printAnimations(s.animation, fps);
     checkSimdEnvironment();
     std::printf("simd        %s: the occlusion tree's traversal runs %d lanes wide\n", isaName(traversalIsa()), int(traversalIsa()));
     if (gpu) {

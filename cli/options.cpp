@@ -109,7 +109,8 @@ void addQuietOption(Command& cmd, Arguments& args) {
     cmd.add({"--quiet", "", "no progress or messages, only errors and warnings", [&](const std::string&) { args.quiet = true; }});
     cmd.add({"--progress", "FORMAT",
              "text (default: a bar on a terminal, else lines), json (one JSON object a line on stderr: "
-             "{\"event\": \"begin\"|\"progress\"|\"end\"|\"info\"|\"warning\"|\"done\", ...}, for programs; "
+             "{\"event\": \"begin\"|\"progress\"|\"end\"|\"info\"|\"warning\"|\"frame\"|\"done\", ...}, for programs; "
+             "with --frames, the events of a frame carry \"frame\": N; "
              "an error stays the one line 'raysplat: error: ...')",
              [&](const std::string& v) {
                  if (v != "text" && v != "json") throw Error(ErrorKind::Config, "--progress " + v + ": unknown format (text, json)");
@@ -153,6 +154,30 @@ void addOutputOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) 
     cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(d.splat.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
 }
 
+// "24" or "1-48": a walkthrough's frames.
+void parseFrames(const std::string& v, RenderConfig& cfg) {
+    const size_t dash = v.find('-', 1);
+    if (v.empty() || v[0] == '-' || (dash != std::string::npos && dash + 1 < v.size() && v[dash + 1] == '-'))
+        throw Error(ErrorKind::Config, "--frames " + v + ": frames are not negative");
+    cfg.firstFrame = parseNumber<int>("--frames", v.substr(0, dash));
+    cfg.lastFrame = dash == std::string::npos ? cfg.firstFrame : parseNumber<int>("--frames", v.substr(dash + 1));
+}
+
+// A walkthrough's frames.
+void addFrameOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
+    cmd.add({"--frames", "A-B",
+             "render frames A to B (inclusive; or one frame N) of the file's animations, frame n at time n / fps, each "
+             "written when it is done: '#' in -o, --png and --stats-json is the frame number, zero-padded to as many "
+             "digits as there are '#' (walk_####.exr); with several frames and no '#', _NNNN goes before the extension",
+             [&](const std::string& v) { parseFrames(v, cfg); }});
+    cmd.add({"--fps", "F", "frames a second of --frames (default " + numberText(d.splat.fps) + ", as Blender's)",
+             [&](const std::string& v) { cfg.fps = parseFloat("--fps", v); }});
+    cmd.add({"--animation", "NAME", "with --frames, play only the animation of this name or index (default: all of them together)",
+             [&](const std::string& v) { cfg.animation = v; }});
+    cmd.add({"--skip-existing", "", "with --frames, skip the frames whose outputs all exist (continue a stopped run)",
+             [&](const std::string&) { cfg.skipExisting = true; }});
+}
+
 // The method, its samples and passes.
 void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
     cmd.add({"--method", "NAME", "splat (default: photon ray splatting with visibility), splat-novis (without), path (reference)",
@@ -192,7 +217,7 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
                                   ", each new eye samples and photons; path " + std::to_string(d.path.passCount()) +
                                   " of --spp; 0: the method's)",
              [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
-    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes",
+    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes; with --frames, each frame's time",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
     cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(d.splat.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
@@ -283,6 +308,7 @@ Arguments parseRender(int argc, char** argv) {
                 "extras set raysplat_portal are light portals (windows): the sun's and the sky's photons enter\n"
                 "through them. glTF alphaMode MASK and BLEND cut surfaces everywhere, the voxel grid included.");
     addOutputOptions(cmd, cfg, d);
+    addFrameOptions(cmd, cfg, d);
     addSamplingOptions(cmd, cfg, d);
     addPhotonOptions(cmd, cfg, d);
     addSkyOptions(cmd, cfg, d);

@@ -109,6 +109,14 @@ public:
         lastDraw_ = now;
         drawBar();
     }
+    void frame(int frame, int left, double secondsLeft) override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (quiet_) return;
+        clearBar();
+        char eta[48] = "";
+        if (secondsLeft >= 0.0) std::snprintf(eta, sizeof eta, ", about %.0f s left", secondsLeft);
+        std::fprintf(stderr, "raysplat: frame %d (%d more after it%s)\n", frame, left, eta);
+    }
     void end() override {
         std::lock_guard<std::mutex> lock(mutex_);
         const bool nested = n_.end();
@@ -200,15 +208,26 @@ public:
         n_.end();
     }
 
+    // From a walkthrough's first frame on, every event says which frame it belongs to.
+    void frame(int frame, int left, double secondsLeft) override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        frame_ = frame;
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "{\"event\": \"frame\", \"left\": %d, \"seconds_left\": %.3f}", left, secondsLeft);
+        write(buf);
+    }
+
 private:
     void line(const std::string& text) {
         std::lock_guard<std::mutex> lock(mutex_);
         write(text);
     }
-    static void write(const std::string& text) {
-        std::fprintf(stderr, "%s\n", text.c_str());
+    void write(const std::string& text) const {
+        const std::string withFrame = frame_ < 0 ? text : "{\"frame\": " + std::to_string(frame_) + ", " + text.substr(1);
+        std::fprintf(stderr, "%s\n", withFrame.c_str());
         std::fflush(stderr);
     }
+    int frame_ = -1;
     std::mutex mutex_;
     Nesting n_;
     Timer clock_;

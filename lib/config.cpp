@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "grid/occlusion_grid.h"
@@ -116,6 +117,7 @@ void RenderConfig::validate() const {
     if (blenderLayer.find_first_of(".\n") != std::string::npos)
         throw Error(ErrorKind::Config, "`blender-layer` '" + blenderLayer + "' names a view layer: no '.' in it");
     validateGrid();
+    validateFrames();
     if (output.empty()) throw Error(ErrorKind::Config, "no output file: give `output` FILE.exr");
     // Refuse before rendering, not after: every output's directory must exist.
     for (const std::string* f : {&output, &png, &statsJson}) {
@@ -130,6 +132,28 @@ void RenderConfig::validate() const {
                                            std::to_string(maxPasses()) + " passes)");
     double pixels = double(width ? width : height) * double(height ? height : width);
     if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
+}
+
+void RenderConfig::validateFrames() const {
+    requireRange("fps", fps, 0.001, 1000);
+    if (!walkthrough()) {
+        if (!animation.empty()) throw Error(ErrorKind::Config, "`animation` picks what `frames` renders: give `frames` too");
+        if (skipExisting) throw Error(ErrorKind::Config, "`skip-existing` skips the frames of `frames`: give `frames` too");
+        return;
+    }
+    const std::string range = std::to_string(firstFrame) + "-" + std::to_string(lastFrame);
+    if (lastFrame < firstFrame) throw Error(ErrorKind::Config, "`frames` " + range + " is reversed: the first frame comes after the last");
+    if (lastFrame > kMaxFrame) throw Error(ErrorKind::Config, "`frames` " + range + ": frames go up to " + std::to_string(kMaxFrame));
+    if (!vdb.empty()) throw Error(ErrorKind::Config, "`vdb` writes one grid: not with `frames`");
+    if (replays()) throw Error(ErrorKind::Config, "`photon` replays a ray of a still: not with `frames`");
+    // A walkthrough writes for a long time: refuse a folder it cannot write to before its first frame.
+    for (const std::string* f : {&output, &png, &statsJson}) {
+        const std::filesystem::path dir = std::filesystem::path(*f).parent_path();
+        std::error_code ec;
+        const std::string d = dir.empty() ? "." : dir.string();
+        if (!f->empty() && std::filesystem::is_directory(d, ec) && access(d.c_str(), W_OK) != 0)
+            throw Error(ErrorKind::Io, *f + ": directory " + d + " cannot be written");
+    }
 }
 
 int RenderConfig::maxPasses() const {
@@ -195,6 +219,10 @@ ImageAttributes RenderConfig::attributes() const {
         a["envRotation"] = std::to_string(envRotation);
     }
     if (!isBlack(sky)) a["sky"] = tripleText({sky.x, sky.y, sky.z});
+    if (walkthrough()) {
+        a["fps"] = numberText(fps);
+        a["animation"] = animation.empty() ? "(all)" : animation;
+    }
     if (splats()) {
         const ClassTriple used = photonSplit();
         a["direct"] = directMethodName(direct);

@@ -21,6 +21,7 @@
 #include "ranks.h"
 #include "render_context.h"
 #include "scene/accel.h"
+#include "scene/environment.h"
 #include "scene/lights.h"
 #include "splat_pass.h"
 
@@ -145,67 +146,96 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs, PhotonStore* stor
 
 }  // namespace
 
-RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, PhotonStore* store) {
+// The scene's part of a render: everything but the camera's.
+struct PreparedScene::Parts {
+    const Scene& scene;
+    const RenderConfig& cfg;
+    Reporter& reporter;
+    Ranks& ranks;
+    int width = 0, height = 0;
+    Stats stats;  // the setup's figures, copied into every view's
+    std::unique_ptr<ThreadPool> pool;
+    std::unique_ptr<RayAccel> accel;
+    std::unique_ptr<Environment> environment;
+    std::unique_ptr<LightSampler> lights;
+};
+
+PreparedScene::PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks)
+    : parts_(new Parts{scene, cfg, reporter, ranks}) {
     cfg.validate();
-    RenderResult result;
-    Stats& stats = result.stats;
-    Camera camera = scene.camera(cfg.camera);
-    int width, height;
-    cfg.resolution(camera.aspect, width, height);
+    Parts& p = *parts_;
+    Stats& stats = p.stats;
+    const Camera camera = scene.camera(cfg.camera);
+    cfg.resolution(camera.aspect, p.width, p.height);
     // Refuse settings the machine cannot hold before allocating anything large.
     const GridGeometry geometry = cfg.splats() || !cfg.vdb.empty() || !cfg.cacheDir.empty()
                                       ? gridForBounds(scene.bounds, cfg.grid)
                                       : GridGeometry();
     const int gridDims[3] = {geometry.dims.x, geometry.dims.y, geometry.dims.z};
     const int threads = cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads();
-    const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), width, height, threads);
+    const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), p.width, p.height, threads);
     checkMemory(memory, cfg.maxMemory, ranks.sizeOnThisMachine());
     stats.setCount("memory_estimate_mb", memory.total() / kMB);
     agreeOrStop(ranks, false);  // every rank got this far: the scene loaded and fits
 
-    ThreadPool pool(cfg.threads);
-    stats.setCount("threads", pool.size());
+    p.pool = std::make_unique<ThreadPool>(cfg.threads);
+    stats.setCount("threads", p.pool->size());
     stats.setCount("ranks", ranks.size());
     stats.setCount("simd_lanes", int(traversalIsa()));  // the occlusion tree traversal's: 4 (sse2) or 16 (avx512)
     stats.setCount("triangles", double(scene.triangleCount()));
     double textureBytes = 0.0;
     for (const Texture& t : scene.textures) textureBytes += double(t.bytes());
     stats.setCount("texture_mb", textureBytes / kMB);  // texels of every mip level
-    stats.setCount("width", width);
-    stats.setCount("height", height);
+    stats.setCount("width", p.width);
+    stats.setCount("height", p.height);
 
     // Ray-tracing acceleration structure and the lights.
     Timer t;
-    RayAccel accel(scene, pool.size());
-    const Environment environment = cfg.environment(scene);
-    LightSampler lights(scene, &environment);
+    p.accel = std::make_unique<RayAccel>(scene, p.pool->size());
+    p.environment = std::make_unique<Environment>(cfg.environment(scene));
+    p.lights = std::make_unique<LightSampler>(scene, p.environment.get());
     stats.addTime("bvh", t.seconds());
-    if (lights.empty()) reporter.warn(scene.path + ": the scene has no lights and no environment: the image will be black");
+    if (p.lights->empty()) reporter.warn(scene.path + ": the scene has no lights and no environment: the image will be black");
+}
 
-    const RenderContext context{scene, accel, lights, camera, width, height, cfg, pool, reporter, stats, ranks};
+PreparedScene::~PreparedScene() = default;
+
+RenderResult PreparedScene::render(const Camera& camera, PhotonStore* store) {
+    const Parts& p = *parts_;
+    const RenderConfig& cfg = p.cfg;
+    RenderResult result;
+    result.stats = p.stats;
+    // How many views shared the setup before this one: 0 where it was built for this one.
+    result.stats.setCount("bvh_reused", views_++);
+    const RenderContext context{p.scene, *p.accel, *p.lights, camera, p.width, p.height, cfg, *p.pool, p.reporter, result.stats, p.ranks};
     if (cfg.splats()) {
         result.film = renderSplat(context, result.outputs.get(), store);
     } else {
         // The path tracer does not need the grid; it is built only when asked for.
-        if (!cfg.vdb.empty() || !cfg.cacheDir.empty()) buildGrid(scene, cfg.gridSettings(), pool, reporter, stats, result.outputs.get());
+        if (!cfg.vdb.empty() || !cfg.cacheDir.empty())
+            buildGrid(p.scene, cfg.gridSettings(), *p.pool, p.reporter, result.stats, result.outputs.get());
         result.film = renderPath(context);
     }
 
     result.attributes = cfg.attributes();
-    result.attributes["scene"] = scene.path;
+    result.attributes["scene"] = p.scene.path;
     result.attributes["version"] = versionString();
     result.attributes["simd"] = isaName(traversalIsa());
     if (cfg.splats() && cfg.probesKernelScale() && !cfg.replays() && !store)
-        result.attributes["kernelScale"] = "auto: " + std::to_string(stats.count("kernel_scale"));
+        result.attributes["kernelScale"] = "auto: " + std::to_string(result.stats.count("kernel_scale"));
     else if (cfg.splats() && store && cfg.kernelScale <= 0.f)
         result.attributes["kernelScale"] = "1";  // stored photons are not probed
-    if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(stats.count("samples_per_pixel")));
-    for (const auto& [stage, s] : stats.seconds) {
+    if (!cfg.splats()) result.attributes["spp"] = std::to_string(int64_t(result.stats.count("samples_per_pixel")));
+    for (const auto& [stage, s] : result.stats.seconds) {
         char b[32];
         std::snprintf(b, sizeof b, "%.4f", s);
         result.attributes["time." + stage] = b;
     }
     return result;
+}
+
+RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, PhotonStore* store) {
+    return PreparedScene(scene, cfg, reporter, ranks).render(scene.camera(cfg.camera), store);
 }
 
 void writeOutputs(RenderResult& result, const RenderConfig& cfg) {

@@ -30,6 +30,25 @@ struct PhotonStore;  // splat_pass.h
 RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks = singleProcess(),
                     PhotonStore* store = nullptr);
 
+// What a render builds from the scene before the camera matters — the memory check, the
+// threads, the BVH, the environment and the lights — kept for any number of views of the same
+// scene: a walkthrough's frames where only the camera moves (lib/walkthrough.h). `scene` must
+// outlive it; every view must have the aspect of cfg's camera (the image size is fixed here).
+class PreparedScene {
+public:
+    PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks);
+    ~PreparedScene();
+    // The image through `camera`: the same bits as render() with the scene's camera there (and
+    // the same store).
+    RenderResult render(const Camera& camera, PhotonStore* store = nullptr);
+    int views() const { return views_; }
+
+private:
+    struct Parts;
+    std::unique_ptr<Parts> parts_;
+    int views_ = 0;
+};
+
 // EXR (+ PNG, + stats JSON) as the config asks, each written atomically.
 void writeOutputs(RenderResult& result, const RenderConfig& cfg);
 

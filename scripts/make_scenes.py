@@ -228,7 +228,9 @@ class GltfBuilder:
     def _view(self, data, target):
         self.bin += b"\0" * (-len(self.bin) % 4)  # 4-byte aligned views
         view = {"buffer": 0, "byteOffset": len(self.bin),
-                "byteLength": len(data), "target": target}
+                "byteLength": len(data)}
+        if target is not None:
+            view["target"] = target
         self.bin += data
         return self._append("bufferViews", view)
 
@@ -296,6 +298,27 @@ class GltfBuilder:
         image = self._append_list("images", {"name": name, "bufferView": view,
                                              "mimeType": "image/png"})
         return self._append_list("textures", {"name": name, "source": image})
+
+    def animation(self, name, channels):
+        """An animation of (node, path, times, values) channels, LINEAR, one key a
+        frame as Blender's exporter bakes them; values are xyz or xyzw tuples."""
+        samplers, targets = [], []
+        for node, path, times, values in channels:
+            t = struct.pack("<%df" % len(times), *times)
+            time_acc = self._append("accessors", {
+                "bufferView": self._view(t, None), "componentType": FLOAT,
+                "count": len(times), "type": "SCALAR",
+                "min": [f32(min(times))], "max": [f32(max(times))]})
+            flat = [c + 0.0 for v in values for c in v]
+            out = self._append("accessors", {
+                "bufferView": self._view(struct.pack("<%df" % len(flat), *flat), None),
+                "componentType": FLOAT, "count": len(values),
+                "type": "VEC%d" % len(values[0])})
+            samplers.append({"input": time_acc, "output": out, "interpolation": "LINEAR"})
+            targets.append({"sampler": len(samplers) - 1,
+                            "target": {"node": node, "path": path}})
+        return self._append_list("animations", {"name": name, "channels": targets,
+                                                "samplers": samplers})
 
     def _append_list(self, key, obj):
         self.doc.setdefault(key, []).append(obj)
@@ -734,7 +757,44 @@ def windowed_room(g, half_x, height, half_z, window, depth, floor, ceiling, wall
 
 
 def interior(outdir):
-    g = GltfBuilder("interior")
+    g = interior_room("interior")
+    g.camera("camera", eye=(0.9, 1.55, 2.3), target=(-0.5, 0.9, -1.2),
+             yfov=1.05, aspect=1.333)
+    g.write_gltf(os.path.join(outdir, "interior.gltf"))
+    return g
+
+
+WALK_FPS, WALK_FRAMES = 24, 48
+
+
+def interior_walk(outdir):
+    """interior.gltf with a walk: a rig carries the camera 1.6 m into the room
+    in 2 s while the camera, its child, turns 35 degrees to the left; baked one
+    key a frame at 24 fps, frames 0-48, as Blender's exporter writes them."""
+    g = interior_room("interior_walk")
+    start, end = (0.9, 1.55, 2.3), (0.3, 1.5, 0.8)
+    yaw0 = math.atan2(1.4, 3.5)  # towards (-0.5, 0.9, -1.2), as interior.gltf's camera
+    pitch = -0.18
+    rig = g.node("camera_rig", t=start)
+    persp = {"yfov": f32(1.05), "znear": f32(0.05), "zfar": f32(100.0), "aspectRatio": f32(1.333)}
+    cam = g._append("cameras", {"name": "camera", "type": "perspective", "perspective": persp})
+    camera = g.node("camera", parent=rig, camera=cam)
+    times, moves, turns = [], [], []
+    for f in range(WALK_FRAMES + 1):
+        u = f / WALK_FRAMES
+        ease = u * u * (3.0 - 2.0 * u)  # starts and stops walking
+        times.append(f / WALK_FPS)
+        moves.append(tuple(a + (b - a) * ease for a, b in zip(start, end)))
+        turns.append(quat_mul(quat_axis_angle(Y, yaw0 + math.radians(35.0) * ease),
+                              quat_axis_angle(X, pitch)))
+    g.animation("walk", [(rig, "translation", times, moves),
+                         (camera, "rotation", times, turns)])
+    g.write_gltf(os.path.join(outdir, "interior_walk.gltf"))
+    return g
+
+
+def interior_room(scene_name):
+    g = GltfBuilder(scene_name)
     wall = g.material("wall", (0.7, 0.68, 0.62))
     ceiling = g.material("ceiling", (0.8, 0.8, 0.8))
     floor = g.material("floor", (0.45, 0.3, 0.2))
@@ -827,9 +887,6 @@ def interior(outdir):
     for side, z in (("a", -2.32), ("b", -1.3)):
         box("shelf_side_" + side, wood, (IN_X - 0.3, 0.1, z),
             (IN_X - 0.02, 1.92, z + 0.02))
-    g.camera("camera", eye=(0.9, 1.55, 2.3), target=(-0.5, 0.9, -1.2),
-             yfov=1.05, aspect=1.333)
-    g.write_gltf(os.path.join(outdir, "interior.gltf"))
     return g
 
 
@@ -936,7 +993,7 @@ def main(argv):
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
                   lambda d: two_rooms(d, gap=True), caustic_pool, point_shadows,
-                  interior, daylight):
+                  interior, interior_walk, daylight):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n

@@ -256,6 +256,148 @@ def bad_scene_tests(tmp):
     ]
 
 
+def animated_gltf(times=(0.0, 1.0), values=((0, 0, 0), (1, 0, 0)), path="translation",
+                  interpolation="LINEAR", node=0, time_type="SCALAR", value_type=None):
+    """triangle_gltf with animation 0 'move': one channel on `node`, its keys' times and values
+    (tuples of 3 or 4 floats) in a second embedded buffer; the accessors' types as given."""
+    doc, _ = triangle_gltf()
+    t = struct.pack("<%df" % len(times), *times)
+    flat = [c for v in values for c in v]
+    v = struct.pack("<%df" % len(flat), *flat)
+    key_bytes = t + v
+    uri = "data:application/octet-stream;base64," + base64.b64encode(key_bytes).decode()
+    doc["buffers"].append({"byteLength": len(key_bytes), "uri": uri})
+    doc["bufferViews"] += [{"buffer": 1, "byteOffset": 0, "byteLength": len(t)},
+                           {"buffer": 1, "byteOffset": len(t), "byteLength": len(v)}]
+    width = len(values[0]) if values else 3
+    doc["accessors"] += [
+        {"bufferView": 2, "componentType": FLOAT, "type": time_type, "count": len(times) // (3 if time_type == "VEC3" else 1)},
+        {"bufferView": 3, "componentType": FLOAT, "type": value_type or "VEC%d" % width, "count": len(values)}]
+    doc["animations"] = [{"name": "move", "samplers": [{"input": 2, "output": 3, "interpolation": interpolation}],
+                          "channels": [{"sampler": 0, "target": {"node": node, "path": path}}]}]
+    return doc
+
+
+def bad_animation_tests(tmp):
+    """Broken animations: render and info fail naming the file and the animation."""
+    def case(name, doc, *names):
+        scene = write_json(os.path.join(tmp, name.replace(" ", "_").replace("/", "_") + ".gltf"), doc)
+        return name, lambda: render_and_info_fail(name, scene, [os.path.basename(scene), "animation 0 'move'", *names])
+
+    nan, inf = float("nan"), float("inf")
+    return [
+        case("anim counts disagree", animated_gltf(values=((0, 0, 0), (1, 0, 0), (2, 0, 0))), "3 output values for 2 times"),
+        case("anim cubicspline one value a key", animated_gltf(interpolation="CUBICSPLINE"), "three a key"),
+        case("anim times not increasing", animated_gltf(times=(0.0, 0.0)), "not increasing"),
+        case("anim NaN time", animated_gltf(times=(0.0, nan)), "time 1", "not finite"),
+        case("anim infinite key", animated_gltf(values=((0, 0, 0), (inf, 0, 0))), "value 1", "not finite"),
+        case("anim zero quaternion", animated_gltf(path="rotation", values=((0, 0, 0, 1), (0, 0, 0, 0))),
+             "zero quaternion"),
+        case("anim node does not exist", animated_gltf(node=5), "node 5 does not exist"),
+        case("anim unknown path", animated_gltf(path="skew"), "unknown path 'skew'"),
+        case("anim output of the wrong type", animated_gltf(path="rotation"), "not VEC4"),
+        case("anim input of the wrong type", animated_gltf(times=(0, 1, 2, 3, 4, 5), time_type="VEC3"), "input", "SCALAR"),
+        case("anim unknown interpolation", animated_gltf(interpolation="BOUNCE"), "BOUNCE"),
+    ]
+
+
+def bad_frames_tests(tmp):
+    """--frames, --fps and --animation refused before anything is written."""
+    walk = os.path.join(DATA, "interior_walk.gltf")
+
+    def case(name, extra, *names, scene=walk, exr="walk_####.exr"):
+        def test():
+            with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+                args = ["render", scene, "-o", os.path.join(out, exr), "--width", "8", "--spp", "1", *extra]
+                expect_clean_error(name, args, list(names), out)
+        return name, test
+
+    missing = os.path.join("no_such_dir", "walk_####.exr")
+    read_only = os.path.join(tmp, "read_only")
+    os.makedirs(read_only, exist_ok=True)
+    os.chmod(read_only, 0o500)
+    unwritable = [] if os.geteuid() == 0 else [  # root writes anywhere
+        case("-o pattern in a read-only directory", ["--frames", "1-2", "-o", os.path.join(read_only, "w_####.exr")],
+             "read_only", "cannot be written")]
+    return unwritable + [
+        case("--frames reversed", ["--frames", "5-2"], "--frames 5-2", "reversed"),
+        case("--frames negative", ["--frames", "-3"], "--frames -3", "negative"),
+        case("--frames negative end", ["--frames", "2--3"], "--frames", "negative"),
+        case("--frames absurd", ["--frames", "0-1000000000"], "--frames", "1000000"),
+        case("--frames not a number", ["--frames", "a-b"], "--frames", "a"),
+        case("--fps 0", ["--frames", "1", "--fps", "0"], "--fps"),
+        case("--animation names nothing", ["--frames", "1", "--animation", "run"], "interior_walk.gltf", "--animation run"),
+        case("--animation index past the end", ["--frames", "1", "--animation", "1"], "interior_walk.gltf", "--animation 1"),
+        case("--animation without --frames", ["--animation", "walk"], "--animation", "--frames"),
+        case("-o pattern in a missing directory", ["--frames", "1-2"], missing, exr=missing),
+    ]
+
+
+def walk_args(*extra):
+    """The walkthrough, as small and quick as it renders."""
+    return ["render", os.path.join(DATA, "interior_walk.gltf"), "--width", "32", "--passes", "1",
+            "--photons", "20k", "--spp", "1", "--direct-spp", "2", "--quiet", *extra]
+
+
+def test_frames_are_numbered_and_skip_existing_continues():
+    """--frames 1-2 writes walk_0001.exr and walk_0002.exr ('#' runs) and walk_0001.png (no '#':
+    before the extension); --skip-existing over 1-3 then renders frame 3 alone."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        r = run(*walk_args("-o", os.path.join(out, "walk_####.exr"), "--png", os.path.join(out, "walk.png"),
+                           "--frames", "1-2"), timeout=300)
+        check(r.returncode == 0, "render --frames 1-2 failed: %s" % r.stderr)
+        check(sorted(os.listdir(out)) == ["walk_0001.exr", "walk_0001.png", "walk_0002.exr", "walk_0002.png"],
+              "outputs: %s" % sorted(os.listdir(out)))
+        first = os.stat(os.path.join(out, "walk_0001.exr")).st_mtime_ns
+        r = run(*walk_args("-o", os.path.join(out, "walk_####.exr"), "--png", os.path.join(out, "walk.png"),
+                           "--frames", "1-3", "--skip-existing"), timeout=300)
+        check(r.returncode == 0, "render --skip-existing failed: %s" % r.stderr)
+        check(os.path.exists(os.path.join(out, "walk_0003.exr")), "frame 3 was not rendered")
+        check(os.stat(os.path.join(out, "walk_0001.exr")).st_mtime_ns == first, "frame 1 was rendered again")
+        attrs, _ = exr_header(open(os.path.join(out, "walk_0003.exr"), "rb").read())
+        check(attrs["frame"][1].rstrip(b"\0").endswith(b"3"), "the EXR header's frame is %r" % (attrs["frame"],))
+
+
+def test_frame_alone_equals_frame_in_range():
+    """Frame 3 rendered alone (1 thread) and within --frames 1-4 (2 threads): the same pixels;
+    frames 1 and 3 differ (the camera walks). Frames past the animation's end hold its last
+    pose: 48 and 49 (at 24 fps the walk ends at frame 48) are the same image, with a warning."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        r = run(*walk_args("-o", os.path.join(out, "alone.exr"), "--frames", "3", "--threads", "1"), timeout=300)
+        check(r.returncode == 0, "render --frames 3 failed: %s" % r.stderr)
+        r = run(*walk_args("-o", os.path.join(out, "range.exr"), "--frames", "1-4", "--threads", "2"), timeout=300)
+        check(r.returncode == 0, "render --frames 1-4 failed: %s" % r.stderr)
+        pixels = {}
+        for name in ("alone.exr", "range_0001.exr", "range_0003.exr"):
+            with open(os.path.join(out, name), "rb") as f:
+                pixels[name] = exr_pixel_chunks(f.read())
+        check(pixels["alone.exr"] == pixels["range_0003.exr"], "frame 3 alone and in 1-4 differ")
+        check(pixels["range_0001.exr"] != pixels["range_0003.exr"], "frames 1 and 3 are the same image")
+        r = run(*walk_args("-o", os.path.join(out, "end_##.exr"), "--frames", "48-49"), timeout=300)
+        check(r.returncode == 0, "render --frames 48-49 failed: %s" % r.stderr)
+        check("last pose is held" in r.stderr, "no warning past the end: %r" % r.stderr)
+        ends = [exr_pixel_chunks(open(os.path.join(out, "end_%d.exr" % f), "rb").read()) for f in (48, 49)]
+        check(ends[0] == ends[1], "frame 49 is not frame 48's pose")
+
+
+def test_progress_json_carries_the_frame_and_info_lists_animations():
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        args = [a for a in walk_args("-o", os.path.join(out, "w.exr"), "--frames", "0-1") if a != "--quiet"]
+        r = run(*args, "--progress", "json", timeout=300)
+        check(r.returncode == 0, "render --progress json failed: %s" % r.stderr)
+        events = [json.loads(line) for line in r.stderr.splitlines()]
+        frames = [e for e in events if e["event"] == "frame"]
+        check([(e["frame"], e["left"]) for e in frames] == [(0, 1), (1, 0)], "frame events: %s" % frames)
+        first = events.index(frames[0])
+        check(all("frame" in e for e in events[first:-1]), "events after the first frame without theirs: %s" % events)
+        begins = [e["frame"] for e in events if e["event"] == "begin"]
+        check(sorted(set(begins)) == [0, 1] and begins == sorted(begins), "the stages' frames: %s" % begins)
+    r = run("info", os.path.join(DATA, "interior_walk.gltf"), "--fps", "12")
+    check(r.returncode == 0, "info failed: %s" % r.stderr)
+    check("0 'walk': 0 to 2 s, frames 0-24: node 84 'camera_rig' translation; node 85 'camera' rotation" in r.stdout,
+          "info does not list the walk: %s" % r.stdout)
+
+
 def bad_setting_tests(tmp):
     # A square EXR: an image, but not an equirectangular environment.
     not_equirect = os.path.join(tmp, "square_sky.exr")
@@ -730,6 +872,47 @@ def interrupt(case, signals, delay, command="render"):
         MESSAGES.append((case, command, "%s (stopped %.2f s after the signal)" % (lines[0], stopped)))
 
 
+def test_a_stopped_walkthrough_leaves_whole_frames():
+    """SIGTERM while frame 2 of 0-40 renders: exit 143, the frames done before it whole (their EXRs
+    parse, named by their frame) and nothing else: no temporary, no part of frame 2."""
+    import signal as sig
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_sig_") as out:
+        args = [a for a in walk_args("-o", os.path.join(out, "walk_####.exr"), "--frames", "0-40") if a != "--quiet"]
+        p = subprocess.Popen([RAYSPLAT, *args, "--progress", "json"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, errors="replace")
+        for line in p.stderr:
+            event = json.loads(line)
+            if event["event"] == "begin" and event.get("frame") == 2:
+                p.send_signal(sig.SIGTERM)
+                break
+        try:
+            p.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise Failure("still running 30 s after the signal")
+        check(p.returncode == 128 + sig.SIGTERM, "exit %d, expected %d" % (p.returncode, 128 + sig.SIGTERM))
+        left = sorted(os.listdir(out))
+        check(left == ["walk_0000.exr", "walk_0001.exr"], "the folder holds %s" % left)
+        for name in left:
+            with open(os.path.join(out, name), "rb") as f:
+                check(len(exr_pixel_chunks(f.read())) > 0, "%s is not a whole EXR" % name)
+
+
+def test_morph_targets_warn_once_and_render_the_rest_pose():
+    """A morph target weights channel beside a translation: one warning naming morph targets,
+    the frame rendered."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
+        doc = animated_gltf()
+        doc["animations"][0]["channels"].append({"sampler": 0, "target": {"node": 0, "path": "weights"}})
+        scene = write_json(os.path.join(out, "morph.gltf"), doc)
+        r = run("render", scene, "-o", os.path.join(out, "m.exr"), "--frames", "0-1", "--width", "16", "--spp", "1",
+                "--passes", "1", "--photons", "1000", "--sky", "1", "--quiet")
+        check(r.returncode == 0, "render failed: %s" % r.stderr)
+        warnings = [l for l in r.stderr.splitlines() if "morph targets" in l]
+        check(len(warnings) == 1 and "rest pose" in warnings[0], "warnings: %r" % r.stderr)
+        check(sorted(os.listdir(out)) == ["m_0000.exr", "m_0001.exr", "morph.gltf"], "outputs: %s" % os.listdir(out))
+
+
 def interrupt_tests():
     import signal as sig
     return [
@@ -749,6 +932,8 @@ def main():
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
         tests = [("bad scene: " + n, f) for n, f in bad_scene_tests(tmp)]
         tests += [("bad setting: " + n, f) for n, f in bad_setting_tests(tmp)]
+        tests += [("bad animation: " + n, f) for n, f in bad_animation_tests(tmp)]
+        tests += [("bad frames: " + n, f) for n, f in bad_frames_tests(tmp)]
         tests += [("interrupted: " + n, f) for n, f in interrupt_tests()]
         tests += [(f.__name__, f) for f in (
             test_unknown_command_is_an_error,
@@ -766,6 +951,11 @@ def main():
             test_usage_page_lists_the_options_of_help,
             test_one_and_two_threads_give_identical_pixels,
             test_stats_of_a_black_render_are_json,
+            test_frames_are_numbered_and_skip_existing_continues,
+            test_frame_alone_equals_frame_in_range,
+            test_progress_json_carries_the_frame_and_info_lists_animations,
+            test_a_stopped_walkthrough_leaves_whole_frames,
+            test_morph_targets_warn_once_and_render_the_rest_pose,
         )]
         for name, test in tests:
             try:

@@ -18,6 +18,9 @@ public:
     virtual void begin(const std::string& /*stage*/, int64_t /*total*/, const char* /*unit*/) {}
     virtual void advance(int64_t /*units*/) {}
     virtual void end() {}
+    // A walkthrough's frame `frame` begins, `left` frames of the run after it, about
+    // `secondsLeft` seconds for them all with it (< 0: not known yet). What follows is that frame's.
+    virtual void frame(int /*frame*/, int /*left*/, double /*secondsLeft*/) {}
 };
 
 // A reporter that says nothing; the default of every stage.

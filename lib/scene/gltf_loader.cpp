@@ -62,6 +62,8 @@ Scene GltfLoader::loadAll() {
     loadMaterials();
     decodeImages();
     loadLights();
+    loadAnimations();
+    if (pose_ && pose_->size() != model_.nodes.size()) fail("the pose does not match the file's nodes", ErrorKind::Internal);
 
     // Flatten the node hierarchy of the default scene into world space.
     if (model_.scenes.empty()) fail("the file has no scene");
@@ -183,6 +185,7 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
         if (node.scale.size() == 3) s = glm::scale(Mat4(1.f), Vec3(node.scale[0], node.scale[1], node.scale[2]));
         local = t * r * s;
     }
+    if (pose_) local = (*pose_)[index];
     Mat4 world = parent * local;
     for (int c = 0; c < 4; ++c)
         if (!isFinite(Vec3(world[c])) || !std::isfinite(world[c].w)) fail(where + " has a non-finite transform");
@@ -203,7 +206,11 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
             addMesh(node.mesh, world, where);
         }
     }
-    if (node.camera >= 0) addCamera(node.camera, world, where, node.name);
+    if (node.camera >= 0) {
+        const size_t cameras = scene_.cameras.size();
+        addCamera(node.camera, world, where, node.name);
+        if (scene_.cameras.size() > cameras) scene_.animation.cameraNode.push_back(index);
+    }
     auto ext = node.extensions.find("KHR_lights_punctual");
     if (ext != node.extensions.end() && ext->second.Has("light")) {
         int li = ext->second.Get("light").GetNumberAsInt();

@@ -29,9 +29,11 @@ inline std::string quoted(const std::string& kind, int index, const std::string&
 
 class GltfLoader {
 public:
-    // threads: for decoding images (0: one per hardware thread).
-    GltfLoader(const std::string& path, Reporter& reporter, int threads = 0)
-        : path_(path), reporter_(reporter), threads_(threads) {}
+    // threads: for decoding images (0: one per hardware thread). With `pose`
+    // (SceneAnimation::pose: every node's local transform), the nodes are flattened as posed
+    // instead of as the file writes them.
+    GltfLoader(const std::string& path, Reporter& reporter, int threads = 0, const std::vector<Mat4>* pose = nullptr)
+        : path_(path), reporter_(reporter), threads_(threads), pose_(pose) {}
     Scene load();
 
 private:
@@ -57,6 +59,10 @@ private:
     // Custom Properties") set raysplat_portal to true or 1 is a light portal, not geometry.
     static constexpr const char* kPortalProperty = "raysplat_portal";
     static bool isPortal(const tinygltf::Node& node);
+    // -- Animations and the node hierarchy (gltf_animation.cpp)
+    void loadNodeHierarchy();
+    void loadAnimations();
+    AnimationChannel loadChannel(const tinygltf::Animation& a, const tinygltf::AnimationChannel& ch, const std::string& where);
     // -- Materials, textures, KHR_lights_punctual (gltf_materials.cpp)
     void loadMaterials();
     // The Scene::textures index of glTF texture `textureIndex`, one per (image, srgb): colour
@@ -94,6 +100,7 @@ private:
     std::string path_;
     Reporter& reporter_;
     int threads_ = 0;
+    const std::vector<Mat4>* pose_;
     tinygltf::Model model_;
     Scene scene_;
     uint32_t defaultMaterial_ = 0;

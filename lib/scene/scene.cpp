@@ -20,8 +20,8 @@ const char* materialKindName(MaterialKind kind) {
     return "?";
 }
 
-Scene loadScene(const std::string& path, Reporter& reporter, int threads) {
-    return gltf::GltfLoader(path, reporter, threads).load();
+Scene loadScene(const std::string& path, Reporter& reporter, int threads, const std::vector<Mat4>* pose) {
+    return gltf::GltfLoader(path, reporter, threads, pose).load();
 }
 
 // -- Scene queries ---------------------------------------------------------------------------

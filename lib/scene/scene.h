@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "scene/animation.h"
 #include "scene/texture.h"
 
 namespace rs {
@@ -107,6 +108,9 @@ struct Scene {
         Vec3 sky{0.f};     // a uniform sky; black: none
     } environment;
     std::vector<Camera> cameras;  // every camera the default scene's nodes place, in node order
+    // The file's node hierarchy and animations (a still renders the nodes as the file writes
+    // them; a walkthrough poses them a frame at a time).
+    SceneAnimation animation;
     Bounds3 bounds;
 
     size_t triangleCount() const { return triMaterial.size(); }
@@ -136,7 +140,8 @@ struct Scene {
 };
 
 // Loads a .gltf or .glb file, decoding its images on `threads` threads (0: one per hardware
-// thread). Throws Error(Scene/Io) naming the file and glTF object.
-Scene loadScene(const std::string& path, class Reporter& reporter, int threads = 0);
+// thread); with `pose` (SceneAnimation::pose), the nodes flattened as posed. Throws
+// Error(Scene/Io) naming the file and glTF object.
+Scene loadScene(const std::string& path, class Reporter& reporter, int threads = 0, const std::vector<Mat4>* pose = nullptr);
 
 }  // namespace rs

@@ -32,7 +32,20 @@ void loadGltf(const uint8_t* data, size_t size) {
     if (size == 0) return;
     const std::string path = writeInput(data[0] % 2 ? ".glb" : ".gltf", data + 1, size - 1);
     try {
-        loadScene(path, silentReporter());
+        const Scene scene = loadScene(path, silentReporter());
+        // An animated file: its poses before, inside and after its keys, and the scene flattened
+        // as posed, as a walkthrough evaluates them.
+        const SceneAnimation& a = scene.animation;
+        if (a.animated()) {
+            const std::vector<int> all = a.select("", path);
+            const float start = a.start(all), end = a.end(all);
+            for (float t : {start - 1.f, 0.5f * (start + end), end + 1.f}) {
+                const std::vector<Mat4> pose = a.pose(all, t);
+                for (size_t c = 0; c < scene.cameras.size(); ++c) placeCamera(scene.cameras[c], a.worldFrom(a.cameraNode[c], pose));
+            }
+            const std::vector<Mat4> pose = a.pose(all, 0.5f * (start + end));
+            loadScene(path, silentReporter(), 0, &pose);
+        }
     } catch (const Error&) {
     }
     std::remove(path.c_str());

@@ -1,0 +1,263 @@
+// animation_test: glTF animations evaluated against hand-computed values for each interpolation,
+// parent chains posed through the loader and through the walkthrough's camera alike, frame
+// numbering in output names, and a frame rendered alone and within a range giving the same image.
+#include <fstream>
+
+#include "scene/animation.h"
+#include "test_scenes.h"
+#include "walkthrough.h"
+
+namespace rs {
+namespace {
+
+using test::TempDir;
+
+constexpr float kTol = 1e-6f;
+
+AnimationChannel channel(AnimatedPath path, Interpolation interpolation, std::vector<float> times, std::vector<Vec4> values) {
+    AnimationChannel c;
+    c.node = 0;
+    c.path = path;
+    c.interpolation = interpolation;
+    c.times = std::move(times);
+    c.values = std::move(values);
+    return c;
+}
+
+void expectNear(const Vec4& a, const Vec4& b, float tol = kTol) {
+    for (int k = 0; k < 4; ++k) EXPECT_NEAR(a[k], b[k], tol) << "component " << k;
+}
+
+TEST(Animation, StepHoldsEachKeyUntilTheNextAndTheEndsOutside) {
+    const Vec4 a(1, 2, 3, 0), b(4, 5, 6, 0), c(7, 8, 9, 0);
+    const AnimationChannel s = channel(AnimatedPath::Translation, Interpolation::Step, {1.f, 2.f, 4.f}, {a, b, c});
+    expectNear(s.at(0.f), a);    // before the first key: held
+    expectNear(s.at(1.f), a);
+    expectNear(s.at(1.99f), a);
+    expectNear(s.at(2.f), b);    // a key's value from its own time on
+    expectNear(s.at(3.9f), b);
+    expectNear(s.at(4.f), c);
+    expectNear(s.at(100.f), c);  // after the last: held
+}
+
+TEST(Animation, LinearTranslationAndScaleMixByTheKeyInterval) {
+    const AnimationChannel s = channel(AnimatedPath::Scale, Interpolation::Linear, {0.f, 2.f, 3.f},
+                                       {Vec4(1, 1, 1, 0), Vec4(3, 1, -1, 0), Vec4(3, 2, -1, 0)});
+    expectNear(s.at(0.5f), Vec4(1.5f, 1.f, 0.5f, 0.f));  // a quarter of the first interval
+    expectNear(s.at(2.5f), Vec4(3.f, 1.5f, -1.f, 0.f));  // half of the second
+}
+
+TEST(Animation, LinearRotationSlerpsAlongTheShorterArc) {
+    // Identity to 90 degrees about +Y, the second key written as its negative (the same rotation):
+    // halfway is 45 degrees about +Y, not the long way round.
+    const float h = std::sqrt(0.5f);
+    const AnimationChannel r = channel(AnimatedPath::Rotation, Interpolation::Linear, {0.f, 1.f},
+                                       {Vec4(0, 0, 0, 1), Vec4(0, -h, 0, -h)});
+    const Vec4 q = r.at(0.5f);
+    const float s = std::sin(kPi / 8.f), c = std::cos(kPi / 8.f);
+    const float sign = q.w < 0.f ? -1.f : 1.f;
+    expectNear(sign * q, Vec4(0, s, 0, c));
+    // A third of the way: 30 degrees (slerp, not a normalized lerp, which gives about 27.4).
+    const Vec4 third = r.at(1.f / 3.f);
+    EXPECT_NEAR(2.f * std::acos(std::abs(third.w)), kPi / 6.f, 1e-5f);
+}
+
+TEST(Animation, CubicSplineIsTheHermiteSplineWithTangentsScaledByTheInterval) {
+    // Keys at t = 0 and 2 (interval 2): values 0 and 1, out-tangent 3 at the first, in-tangent -1
+    // at the second (in x). p(s) = h00 p0 + 2 h10 m0 + h01 p1 + 2 h11 m1 with s = t / 2.
+    const Vec4 zero(0.f);
+    const AnimationChannel c = channel(AnimatedPath::Translation, Interpolation::CubicSpline, {0.f, 2.f},
+                                       {Vec4(9, 0, 0, 0), zero, Vec4(3, 0, 0, 0), Vec4(-1, 0, 0, 0), Vec4(1, 0, 0, 0), Vec4(9, 0, 0, 0)});
+    // s = 0.5: 0 + 2·0.125·3 + 0.5·1 + 2·(−0.125)·(−1) = 1.5
+    EXPECT_NEAR(c.at(1.f).x, 1.5f, kTol);
+    // s = 0.25: 2·0.140625·3 + 0.15625·1 + 2·(−0.046875)·(−1) = 1.09375
+    EXPECT_NEAR(c.at(0.5f).x, 1.09375f, kTol);
+    // The keys' values at the keys and outside, the tangents (9) never.
+    EXPECT_NEAR(c.at(0.f).x, 0.f, kTol);
+    EXPECT_NEAR(c.at(2.f).x, 1.f, kTol);
+    EXPECT_NEAR(c.at(-1.f).x, 0.f, kTol);
+    EXPECT_NEAR(c.at(5.f).x, 1.f, kTol);
+}
+
+TEST(Animation, CubicSplineRotationsComeOutNormalized) {
+    const float h = std::sqrt(0.5f);
+    const AnimationChannel c = channel(AnimatedPath::Rotation, Interpolation::CubicSpline, {0.f, 1.f},
+                                       {Vec4(0.f), Vec4(0, 0, 0, 1), Vec4(0.f), Vec4(0.f), Vec4(0, h, 0, h), Vec4(0.f)});
+    const Vec4 q = c.at(0.5f);
+    EXPECT_NEAR(glm::length(q), 1.f, kTol);
+    // Zero tangents and symmetric weights: halfway between the two, normalized: 45 degrees about +Y.
+    expectNear(q, Vec4(0, std::sin(kPi / 8.f), 0, std::cos(kPi / 8.f)), 1e-6f);
+}
+
+// -- Through the loader: a glTF file written here ----------------------------------------------
+
+std::string join(const std::vector<std::string>& parts) {
+    std::string s;
+    for (size_t i = 0; i < parts.size(); ++i) s += (i ? "," : "") + parts[i];
+    return s;
+}
+
+std::string floats(const std::vector<float>& v) { return std::string(reinterpret_cast<const char*>(v.data()), v.size() * 4); }
+
+// A rig (animated: translation (0,0,0) → (2,0,0) and rotation 0 → 90 degrees about +Y over one
+// second, LINEAR) with two children 1 m along its +Z: a camera, and (with `meshChild`) a triangle.
+std::string writeRigScene(const TempDir& dir, bool meshChild) {
+    std::string bin;
+    std::vector<std::string> views, accessors;
+    auto add = [&](const std::string& bytes, int count, const char* type) {
+        views.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
+        bin += bytes;
+        accessors.push_back("{\"bufferView\":" + std::to_string(views.size() - 1) + ",\"componentType\":5126,\"count\":" +
+                            std::to_string(count) + ",\"type\":\"" + type + "\"}");
+        return std::to_string(accessors.size() - 1);
+    };
+    const float h = std::sqrt(0.5f);
+    const std::string tri = add(floats({0, 0, 0, 1, 0, 0, 0, 1, 0}), 3, "VEC3");
+    const std::string times = add(floats({0.f, 1.f}), 2, "SCALAR");
+    const std::string moves = add(floats({0, 0, 0, 2, 0, 0}), 2, "VEC3");
+    const std::string turns = add(floats({0, 0, 0, 1, 0, h, 0, h}), 2, "VEC4");
+    // A ground triangle far below, so that a cameras-only scene still has geometry.
+    const std::string ground = add(floats({-50, -5, -50, 50, -5, -50, 0, -5, 50}), 3, "VEC3");
+    std::string nodes = "{\"name\":\"rig\",\"children\":[1" + std::string(meshChild ? ",2" : "") + "]},"
+                        "{\"name\":\"cam\",\"camera\":0,\"translation\":[0,0,1]},"
+                        "{\"name\":\"thing\",\"mesh\":0,\"translation\":[0,0,1]},"
+                        "{\"name\":\"ground\",\"mesh\":1}";
+    std::string doc = "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,3]}],\"nodes\":[" + nodes + "],"
+                      "\"cameras\":[{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.8,\"znear\":0.1}}],"
+                      "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + tri + "}}]},"
+                      "{\"primitives\":[{\"attributes\":{\"POSITION\":" + ground + "}}]}],"
+                      "\"animations\":[{\"name\":\"walk\",\"samplers\":[{\"input\":" + times + ",\"output\":" + moves + "},"
+                      "{\"input\":" + times + ",\"output\":" + turns + "}],\"channels\":["
+                      "{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}},"
+                      "{\"sampler\":1,\"target\":{\"node\":0,\"path\":\"rotation\"}}]}],"
+                      "\"accessors\":[" + join(accessors) + "],\"bufferViews\":[" + join(views) + "],"
+                      "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"rig.bin\"}]}";
+    std::ofstream(dir.file("rig.bin"), std::ios::binary) << bin;
+    std::ofstream(dir.file("rig.gltf"), std::ios::binary) << doc;
+    return dir.file("rig.gltf");
+}
+
+TEST(Animation, ParentChainPosesChildrenAsHandComputed) {
+    TempDir dir;
+    const std::string path = writeRigScene(dir, true);
+    const Scene rest = loadScene(path, silentReporter());
+    const SceneAnimation& a = rest.animation;
+    ASSERT_EQ(a.animations.size(), 1u);
+    EXPECT_FALSE(a.movesOnlyCameras({0}));  // the triangle rides on the rig
+    const std::vector<Mat4> pose = a.pose({0}, 0.5f);
+    const Scene posed = loadScene(path, silentReporter(), 0, &pose);
+    // At t = 0.5 the rig stands at (1,0,0) turned 45 degrees about +Y: a point 1 m along its +Z is
+    // at (1 + sin 45, 0, cos 45), and the camera looks along the turned −Z, (−sin 45, 0, −cos 45).
+    const float s = std::sqrt(0.5f);
+    ASSERT_EQ(posed.cameras.size(), 1u);
+    const Camera& cam = posed.cameras[0];
+    EXPECT_NEAR(cam.position.x, 1.f + s, 1e-5f);
+    EXPECT_NEAR(cam.position.y, 0.f, 1e-5f);
+    EXPECT_NEAR(cam.position.z, s, 1e-5f);
+    EXPECT_NEAR(cam.forward.x, -s, 1e-5f);
+    EXPECT_NEAR(cam.forward.z, -s, 1e-5f);
+    // The triangle's vertices at the rig's local (0,0,1) and (1,0,1), turned (x' = x cos + z sin,
+    // z' = −x sin + z cos) and moved: (1 + s, 0, s) and (1 + 2s, 0, 0).
+    EXPECT_NEAR(posed.positions[0].x, 1.f + s, 1e-5f);
+    EXPECT_NEAR(posed.positions[0].z, s, 1e-5f);
+    EXPECT_NEAR(posed.positions[1].x, 1.f + 2.f * s, 1e-5f);
+    EXPECT_NEAR(posed.positions[1].z, 0.f, 1e-5f);
+    // The still: the file's own transforms (rig at the origin, unturned).
+    EXPECT_NEAR(rest.cameras[0].position.z, 1.f, 1e-6f);
+    EXPECT_NEAR(rest.positions[0].x, 0.f, 1e-6f);
+}
+
+TEST(Animation, WalkthroughCameraEqualsTheLoadersPosedCameraBitForBit) {
+    // Where only cameras move the walkthrough poses the camera itself; it must be the camera the
+    // loader flattens from the same pose.
+    TempDir dir;
+    const std::string path = writeRigScene(dir, false);
+    const Scene rest = loadScene(path, silentReporter());
+    const SceneAnimation& a = rest.animation;
+    EXPECT_TRUE(a.movesOnlyCameras({0}));
+    for (float t : {0.f, 0.3f, 0.77f, 2.f}) {
+        const std::vector<Mat4> pose = a.pose({0}, t);
+        const Scene posed = loadScene(path, silentReporter(), 0, &pose);
+        const Camera placed = placeCamera(rest.cameras[0], a.worldFrom(a.cameraNode[0], pose));
+        const Camera& loaded = posed.cameras[0];
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_EQ(placed.position[k], loaded.position[k]) << "t " << t;
+            EXPECT_EQ(placed.forward[k], loaded.forward[k]) << "t " << t;
+            EXPECT_EQ(placed.right[k], loaded.right[k]) << "t " << t;
+            EXPECT_EQ(placed.up[k], loaded.up[k]) << "t " << t;
+        }
+    }
+    // With no pose the loader's nodes are the rest pose's: pose() reproduces the file.
+    const std::vector<Mat4> restPose = a.pose({}, 0.f);
+    const Scene again = loadScene(path, silentReporter(), 0, &restPose);
+    EXPECT_EQ(again.positions, rest.positions);
+    EXPECT_EQ(again.cameras[0].position, rest.cameras[0].position);
+}
+
+// A small, quick walkthrough of the rig scene under a uniform sky.
+RenderConfig walkConfig(const std::string& scene, const TempDir& dir, int first, int last) {
+    RenderConfig cfg;
+    cfg.scene = scene;
+    cfg.output = dir.file("frame.exr");
+    cfg.width = cfg.height = 24;
+    cfg.spp = 1;
+    cfg.directSpp = 2;
+    cfg.grid = 32;
+    cfg.voxelizer = "cpu";
+    cfg.passes = 1;
+    cfg.photons = 5000;
+    cfg.sky = Vec3(1.f);
+    cfg.firstFrame = first;
+    cfg.lastFrame = last;
+    return cfg;
+}
+
+bool sameFilm(const Film& a, const Film& b) {
+    for (int b2 = 0; b2 < FixedFilm::kBuffers; ++b2)
+        if (a.buffer(b2) != b.buffer(b2)) return false;
+    return a.width == b.width && a.height == b.height;
+}
+
+TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
+    // Whether only the camera moves (the scene loaded once, the BVH and the photons kept) or a
+    // mesh rides on the rig (each frame loaded as posed), frame f is bit for bit the still of the
+    // file posed at f / fps; the frames differ from each other.
+    for (bool meshChild : {false, true}) {
+        TempDir dir;
+        const std::string path = writeRigScene(dir, meshChild);
+        const RenderConfig cfg = walkConfig(path, dir, 6, 12);
+        Walkthrough walk(cfg, silentReporter(), singleProcess());
+        EXPECT_EQ(walk.movesOnlyCameras(), !meshChild);
+        RenderConfig still = cfg;
+        still.firstFrame = still.lastFrame = -1;
+        std::vector<Film> frames;
+        for (int frame : {6, 12}) {
+            RenderResult r = walk.renderFrame(frame);
+            const std::vector<Mat4> pose = walk.restScene().animation.pose({0}, float(frame) / cfg.fps);
+            const Scene posed = loadScene(path, silentReporter(), 0, &pose);
+            const RenderResult expected = render(posed, still, silentReporter());
+            EXPECT_TRUE(sameFilm(r.film, expected.film)) << "frame " << frame << (meshChild ? ", mesh moving" : ", camera only");
+            // The setup and the photons are kept across frames only where only the camera moves:
+            // the one pass's photons traced once, for frame 6.
+            EXPECT_EQ(r.stats.count("bvh_reused"), meshChild || frame == 6 ? 0.0 : 1.0);
+            EXPECT_EQ(r.stats.count("photon_passes_traced"), meshChild ? 0.0 : 1.0);
+            frames.push_back(std::move(r.film));
+        }
+        EXPECT_FALSE(sameFilm(frames[0], frames[1]));
+        EXPECT_GT(test::layerMean(frames[0], kDirect) + test::layerMean(frames[0], kEmission), 0.0);
+    }
+}
+
+TEST(Animation, FramePathsFollowBlendersNumbering) {
+    EXPECT_EQ(framePath("walk_####.exr", 24, true), "walk_0024.exr");
+    EXPECT_EQ(framePath("walk_####.exr", 24, false), "walk_0024.exr");
+    EXPECT_EQ(framePath("walk_#.exr", 123, true), "walk_123.exr");     // the run is a least width
+    EXPECT_EQ(framePath("a_##_b_###.png", 7, true), "a_##_b_007.png");  // the last run
+    EXPECT_EQ(framePath("walk.exr", 24, true), "walk_0024.exr");
+    EXPECT_EQ(framePath("walk.exr", 24, false), "walk.exr");
+    EXPECT_EQ(framePath("out.d/walk", 3, true), "out.d/walk_0003");
+    EXPECT_EQ(framePath("take#2/walk.exr", 3, true), "take#2/walk_0003.exr");  // not in a directory
+}
+
+}  // namespace
+}  // namespace rs
