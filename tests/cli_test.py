@@ -229,6 +229,25 @@ def bad_scene_tests(tmp):
     patched = write_bytes(os.path.join(tmp, "truncated_chunk.glb"),
                           cut[:8] + struct.pack("<I", len(cut)) + cut[12:])
 
+    # A TANGENT that is VEC3 (glTF wants VEC4 floats: xyz and the bitangent's sign).
+    doc, buf = triangle_gltf()
+    doc["accessors"].append({"bufferView": 0, "componentType": FLOAT, "type": "VEC3", "count": 3})
+    doc["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 2
+    vec3_tangent = write_json(os.path.join(tmp, "vec3_tangent.gltf"), doc)
+
+    # KHR_texture_transform with a NaN rotation, and with a scale beyond a float (1e39).
+    ihdr = struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)
+    grey = (PNG_SIGNATURE + png_chunk(b"IHDR", ihdr) + png_chunk(b"IDAT", zlib.compress(b"\0\x80\x80\x80"))
+            + png_chunk(b"IEND", b""))
+    write_bytes(os.path.join(tmp, "grey.png"), grey)
+    transforms = []
+    for name, transform in (("nan_rotation", {"rotation": float("nan")}), ("huge_scale", {"scale": [1e39, 1]})):
+        doc = textured_gltf("grey.png")
+        doc["extensionsUsed"] = ["KHR_texture_transform"]
+        doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {
+            "KHR_texture_transform": transform}
+        transforms.append(write_json(os.path.join(tmp, "transform_%s.gltf" % name), doc))
+
     empty_gltf = write_bytes(os.path.join(tmp, "empty.gltf"), b"")
     empty_glb = write_bytes(os.path.join(tmp, "empty.glb"), b"")
 
@@ -249,6 +268,11 @@ def bad_scene_tests(tmp):
         case("0x0 PNG texture as a data URI", zero_data_uri, IMAGE_0),
         case("truncated PNG texture", truncated_png, "image 0", "cut.png"),
         case("text file named .png as a texture", text_png, "image 0", "notes.png"),
+        case("TANGENT of the wrong type", vec3_tangent, "TANGENT", "accessor 2"),
+        # nlohmann's JSON reader refuses the NaN literal (tinygltf's message names no object);
+        # a finite number too large for a float is the loader's own check.
+        case("texture transform with NaN", transforms[0]),
+        case("texture transform beyond a float", transforms[1], "material 0", "KHR_texture_transform"),
         case("truncated .glb", truncated),
         case(".glb with a truncated chunk", patched),
         case("empty .gltf", empty_gltf),

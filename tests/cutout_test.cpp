@@ -26,7 +26,7 @@ Scene cardOverFloor(AlphaMode mode, bool checker) {
     for (int y = 0; y < 4; ++y)
         for (int x = 0; x < 4; ++x) rgba[size_t(4 * (4 * y + x) + 3)] = checker ? uint8_t(255 * ((x + y + 1) % 2)) : 255;
     s.textures.push_back(Texture("card", 4, 4, rgba.data(), true, true));
-    s.materials[card].baseColorTexture = 0;
+    s.materials[card].baseColorTexture.texture = 0;
     s.materials[card].alphaMode = mode;
     s.materials[card].opacity = checker ? 1.f : 0.5f;
     addQuad(s, {-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}, floor);
@@ -93,7 +93,7 @@ TEST(Cutout, MaskedCardEqualsTheSameShapeAsGeometry) {
         cut.triMaterial.pop_back();
         cut.triObject.pop_back();
     }
-    cut.materials[card].baseColorTexture = -1;
+    cut.materials[card].baseColorTexture.texture = -1;
     for (int j = 0; j < 4; ++j)
         for (int i = 0; i < 4; ++i) {
             if ((i + j + 1) % 2 == 0) continue;

@@ -1119,3 +1119,68 @@ TEST(Loader, ImageInABufferViewReadsAsTheFile) {
     for (int y = 0; y < 4; ++y)
         for (int x = 0; x < 4; ++x) EXPECT_EQ(buffer.textures[0].texel(0, x, y), file.textures[0].texel(0, x, y));
 }
+
+// Every texture slot of the metallic-roughness model, KHR_texture_transform (its texCoord
+// overriding the slot's), TEXCOORD_1, COLOR_0 as normalized bytes and TANGENT under a mirroring
+// node: the colour slots read the image decoded from sRGB, the data slots (metallic-roughness,
+// normal) read it as it is — two textures from one image; the tangent turns with the node and,
+// mirrored, its bitangent's side flips.
+TEST(Loader, TextureSlotsTransformsColoursAndTangents) {
+    TempDir dir;
+    GltfBuilder g;
+    const std::string transform = "\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.25,0],\"scale\":[2,2],\"texCoord\":1}}";
+    int mat = g.material("{\"name\":\"all\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0," + transform +
+                         "},\"metallicRoughnessTexture\":{\"index\":0}},\"normalTexture\":{\"index\":0,\"scale\":0.5},"
+                         "\"emissiveTexture\":{\"index\":0},\"emissiveFactor\":[1,1,1]}");
+    int positions = g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    int normals = g.normals({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+    int uv0 = g.accessor(bytesOf(std::vector<float>{0, 0, 1, 0, 0, 1}), kFloat, 3, "VEC2");
+    int uv1 = g.accessor(bytesOf(std::vector<float>{0.5f, 0.5f, 0.75f, 0.5f, 0.5f, 0.75f}), kFloat, 3, "VEC2");
+    int color = g.accessor(std::string("\xff\x00\x80\x33\x66\x99\x00\x00\xff", 9), kUByte, 3, "VEC3");
+    int tangent = g.accessor(bytesOf(std::vector<float>{1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1}), kFloat, 3, "VEC4");
+    const std::string prim = "{\"attributes\":{\"POSITION\":" + std::to_string(positions) + ",\"NORMAL\":" + std::to_string(normals) +
+                             ",\"TEXCOORD_0\":" + std::to_string(uv0) + ",\"TEXCOORD_1\":" + std::to_string(uv1) +
+                             ",\"COLOR_0\":" + std::to_string(color) + ",\"TANGENT\":" + std::to_string(tangent) +
+                             "},\"material\":" + std::to_string(mat) + "}";
+    g.node("\"name\":\"mirrored\",\"scale\":[-1,1,1],\"mesh\":" + std::to_string(g.mesh({prim})));
+    g.extra("\"extensionsUsed\":[\"KHR_texture_transform\"],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"grey.tga\"}]");
+    std::string tga(18, '\0');
+    tga[2] = 2, tga[12] = 1, tga[14] = 1, tga[16] = 24, tga[17] = 0x20;  // 1 × 1, BGR
+    tga += std::string("\x40\x80\xc0", 3);
+    writeFile(dir.file("grey.tga"), tga);
+    RecordingReporter reporter;
+    Scene s = loadScene(g.write(dir, "slots"), reporter);
+    EXPECT_TRUE(reporter.warnings.empty()) << reporter.warnings.front();
+
+    const Material& m = s.materials[size_t(mat)];
+    ASSERT_TRUE(m.baseColorTexture.present() && m.metallicRoughnessTexture.present() && m.normalTexture.present() &&
+                m.emissiveTexture.present());
+    EXPECT_EQ(s.textures.size(), 2u);
+    EXPECT_EQ(m.baseColorTexture.texture, m.emissiveTexture.texture);
+    EXPECT_EQ(m.metallicRoughnessTexture.texture, m.normalTexture.texture);
+    const Vec4 srgb = s.textures[size_t(m.baseColorTexture.texture)].sample(Vec2(0.5f));
+    const Vec4 linear = s.textures[size_t(m.normalTexture.texture)].sample(Vec2(0.5f));
+    EXPECT_NEAR(linear.x, 192.f / 255.f, 1e-6f);  // TGA stores BGR
+    EXPECT_NEAR(linear.z, 64.f / 255.f, 1e-6f);
+    EXPECT_NEAR(srgb.x, std::pow((192.f / 255.f + 0.055f) / 1.055f, 2.4f), 1e-5f);
+    EXPECT_EQ(m.kind, MaterialKind::Mix);  // metallic and roughness vary over the surface
+    EXPECT_FLOAT_EQ(m.normalScale, 0.5f);
+    EXPECT_EQ(m.baseColorTexture.texCoord, 1);
+    EXPECT_EQ(m.metallicRoughnessTexture.texCoord, 0);
+    EXPECT_EQ(m.baseColorTexture.transform.offset, Vec2(0.25f, 0.f));
+    EXPECT_EQ(m.baseColorTexture.transform.scale, Vec2(2.f));
+
+    // The mirror swaps corners 1 and 2 of the triangle; find corners by their TEXCOORD_0.
+    ASSERT_EQ(s.triangleCount(), 1u);
+    ASSERT_EQ(s.uvs1.size(), 3u);
+    ASSERT_EQ(s.colors.size(), 3u);
+    ASSERT_EQ(s.tangents.size(), 3u);
+    for (int c = 0; c < 3; ++c) {
+        const int v = s.uvs[c] == Vec2(0, 0) ? 0 : s.uvs[c] == Vec2(1, 0) ? 1 : 2;
+        const Vec2 wantUv1[3] = {{0.5f, 0.5f}, {0.75f, 0.5f}, {0.5f, 0.75f}};
+        const Vec4 wantColor[3] = {{1.f, 0.f, 128.f / 255.f, 1.f}, {0x33 / 255.f, 0x66 / 255.f, 0x99 / 255.f, 1.f}, {0, 0, 1, 1}};
+        EXPECT_EQ(s.uvs1[c], wantUv1[v]) << "corner " << c;
+        EXPECT_LT(glm::length(s.colors[c] - wantColor[v]), 1e-6f) << "corner " << c;
+        EXPECT_EQ(s.tangents[c], Vec4(-1, 0, 0, -1)) << "corner " << c;
+    }
+}

@@ -130,6 +130,16 @@ inline uint32_t addMaterial(Scene& s, MaterialKind kind, Vec3 baseColor, Vec3 em
     return uint32_t(s.materials.size() - 1);
 }
 
+// Appends a w × h linear texture of RGBA texels in [0, 1] (row 0 at v = 0), stored at 16 bits
+// a channel; returns its index.
+inline int addTexture(Scene& s, int w, int h, const std::vector<Vec4>& texels) {
+    std::vector<uint16_t> rgba;
+    for (const Vec4& v : texels)
+        for (int c = 0; c < 4; ++c) rgba.push_back(uint16_t(std::lround(std::clamp(v[c], 0.f, 1.f) * 65535.f)));
+    s.textures.push_back(Texture("test texture " + std::to_string(s.textures.size()), w, h, rgba.data(), false, true));
+    return int(s.textures.size()) - 1;
+}
+
 // A camera at `from` looking at `to`, square, of vertical field `yfov` (radians).
 inline Camera lookAt(Vec3 from, Vec3 to, Vec3 up, float yfov) {
     Camera c;

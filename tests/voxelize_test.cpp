@@ -146,7 +146,7 @@ uint32_t addCutout(Scene& s, AlphaMode mode, int w, int h, const std::function<f
     std::vector<uint8_t> rgba(4 * size_t(w) * size_t(h), 255);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) rgba[4 * (size_t(y) * size_t(w) + size_t(x)) + 3] = uint8_t(std::lround(255.f * alpha(x, y)));
-    s.materials[m].baseColorTexture = int(s.textures.size());
+    s.materials[m].baseColorTexture.texture = int(s.textures.size());
     s.materials[m].alphaMode = mode;
     s.textures.push_back(Texture("cutout", w, h, rgba.data(), true, true));
     return m;

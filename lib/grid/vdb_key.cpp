@@ -83,10 +83,14 @@ std::string cacheKey(const Scene& scene, int resolution, VoxelizerKind kind) {
     if (scene.hasCutouts()) {
         for (const Material& m : scene.materials) {
             if (m.alphaMode == AlphaMode::Opaque) continue;
-            h.add(uint64_t(m.alphaMode) << 32 | uint64_t(uint32_t(m.baseColorTexture)));
+            const TextureRef& ref = m.baseColorTexture;
+            h.add(uint64_t(m.alphaMode) << 32 | uint64_t(uint32_t(ref.texture)));
             h.add(bitsOf(m.opacity) | bitsOf(m.alphaCutoff) << 32);
-            if (m.baseColorTexture < 0) continue;
-            const Texture& tex = scene.textures[size_t(m.baseColorTexture)];
+            if (!ref.present()) continue;
+            h.add(uint64_t(uint32_t(ref.texCoord)) << 32 | bitsOf(ref.transform.rotation));
+            h.add(bitsOf(ref.transform.offset.x) | bitsOf(ref.transform.offset.y) << 32);
+            h.add(bitsOf(ref.transform.scale.x) | bitsOf(ref.transform.scale.y) << 32);
+            const Texture& tex = scene.textures[size_t(ref.texture)];
             h.add(uint64_t(uint32_t(tex.width())) << 32 | uint64_t(uint32_t(tex.height())));
             if (!tex.hasAlpha()) continue;
             for (int i = 0; i < tex.width() * tex.height(); ++i) h.add(bitsOf(tex.alphaAt(i)));
@@ -95,6 +99,8 @@ std::string cacheKey(const Scene& scene, int resolution, VoxelizerKind kind) {
             if (scene.materials[scene.triMaterial[t]].alphaMode == AlphaMode::Opaque) continue;
             h.add(uint64_t(t) << 32 | scene.triMaterial[t]);
             for (int k = 0; k < 3; ++k) h.add(bitsOf(scene.uvs[3 * t + k].x) | bitsOf(scene.uvs[3 * t + k].y) << 32);
+            for (size_t k = 0; k < 3 && !scene.uvs1.empty(); ++k)
+                h.add(bitsOf(scene.uvs1[3 * t + k].x) | bitsOf(scene.uvs1[3 * t + k].y) << 32);
         }
     }
     char buf[17];

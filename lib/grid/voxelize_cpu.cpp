@@ -37,7 +37,7 @@ namespace {
 // texture, or one for the whole surface without a texture alpha.
 std::vector<uint32_t> cutoutLevels(const Scene& scene, uint32_t m, int& width, int& height) {
     const Material& mat = scene.materials[m];
-    const Texture* tex = mat.baseColorTexture >= 0 ? &scene.textures[size_t(mat.baseColorTexture)] : nullptr;
+    const Texture* tex = mat.baseColorTexture.present() ? &scene.textures[size_t(mat.baseColorTexture.texture)] : nullptr;
     if (tex && !tex->hasAlpha()) tex = nullptr;
     width = tex ? tex->width() : 1;
     height = tex ? tex->height() : 1;
@@ -78,7 +78,9 @@ void prepareCutouts(const Scene& scene, VoxelTriangles& out) {
                     out.cutoutPlanes.push_back(Vec4(0.f));
                     continue;
                 }
-                const double f0 = scene.uvs[3 * t][k], f1 = scene.uvs[3 * t + 1][k], f2 = scene.uvs[3 * t + 2][k];
+                const TextureRef& ref = scene.materials[m].baseColorTexture;
+                const double f0 = scene.cornerTextureUv(ref, t, 0)[k], f1 = scene.cornerTextureUv(ref, t, 1)[k],
+                             f2 = scene.cornerTextureUv(ref, t, 2)[k];
                 const double cu = ((f1 - f0) * (p[2][v] - p[0][v]) - (f2 - f0) * (p[1][v] - p[0][v])) / det;
                 const double cv = ((p[1][u] - p[0][u]) * (f2 - f0) - (p[2][u] - p[0][u]) * (f1 - f0)) / det;
                 const double c0 = f0 - cu * p[0][u] - cv * p[0][v];

@@ -63,7 +63,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
         if (m.isEmissive() && sp.frontFace) {
             float w = 1.f;
             if (!prevDelta) w = emitterHitWeight(lights, prevPdf, prevP, sp);
-            out.layer[cls.layerOfHit()] += beta * m.emission * w;
+            out.layer[cls.layerOfHit()] += beta * scene.emissionAt(sp.material, sp.attr) * w;
         }
 
         Vec3 wo = -d;

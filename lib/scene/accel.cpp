@@ -123,16 +123,14 @@ bool RayAccel::intersect(const Vec3& o, const Vec3& d, float tmax, SurfacePoint&
 
     t = rh.ray.tfar;
     uint32_t tri = rh.hit.primID;
-    float b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.f - b1 - b2;
+    float b1 = rh.hit.u, b2 = rh.hit.v;
     const Scene& s = scene_;
     hit.tri = tri;
     hit.material = s.triMaterial[tri];
     hit.p = o + t * d;
     hit.ng = s.geometricNormal(tri);
-    Vec3 ns = b0 * s.normals[3 * tri] + b1 * s.normals[3 * tri + 1] + b2 * s.normals[3 * tri + 2];
-    float len = glm::length(ns);
-    hit.ns = len > 1e-8f ? ns / len : hit.ng;
-    hit.uv = b0 * s.uvs[3 * tri] + b1 * s.uvs[3 * tri + 1] + b2 * s.uvs[3 * tri + 2];
+    hit.attr = s.attributesAt(tri, b1, b2);
+    hit.ns = s.shadingNormalAt(tri, b1, b2, hit.attr);
     hit.frontFace = glm::dot(d, hit.ng) < 0.f;
     return true;
 }

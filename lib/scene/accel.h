@@ -12,8 +12,8 @@ namespace rs {
 struct SurfacePoint {
     Vec3 p;          // world position
     Vec3 ng;         // geometric normal of the winding (front side), unit
-    Vec3 ns;         // interpolated shading normal, unit
-    Vec2 uv;
+    Vec3 ns;         // shading normal (interpolated, turned by a normal map), unit
+    ShadingAttributes attr;  // uvs and vertex colour
     // Width of the ray's footprint across the surface in uv units (ray_cone.h), for filtering
     // textures (Texture::lodOf); 0, as intersect() leaves it: a point, the full-size image.
     float uvFootprint = 0.f;

@@ -67,7 +67,7 @@ float fresnelDielectric(float cosThetaI, float eta) {
 }
 
 Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
-    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.uv, sp.uvFootprint)) {
+    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.attr, sp.uvFootprint)) {
     const Material& m = *material_;
     bool outside = glm::dot(wo, sp.ng) >= 0.f;
     ng_ = outside ? sp.ng : -sp.ng;
@@ -76,14 +76,17 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
     if (glm::dot(ns, wo) <= 1e-4f || glm::dot(ns, ng_) <= 0.f) ns = ng_;
     frame_ = Frame(ns);
     eta_ = outside ? m.ior : 1.f / m.ior;
-    alpha_ = std::max(m.alpha(), 0.0025f);
+    // Metallic and roughness at the point (the factors × the metallicRoughnessTexture).
+    const Vec2 mr = m.metallicRoughnessTexture.present() ? scene.metallicRoughness(sp.material, sp.attr)
+                                                         : Vec2(m.metallic, m.roughness);
+    alpha_ = std::max(std::max(mr.y * mr.y, 1e-3f), 0.0025f);
     switch (m.kind) {
         case MaterialKind::Lambert: diffuseWeight_ = 1.f; break;
         case MaterialKind::Glossy: hasGgx_ = true; f0_ = albedo_; break;
         case MaterialKind::Mix:
             hasGgx_ = true;
-            diffuseWeight_ = 1.f - m.metallic;
-            f0_ = glm::mix(Vec3(0.04f), albedo_, m.metallic);
+            diffuseWeight_ = 1.f - mr.x;
+            f0_ = glm::mix(Vec3(0.04f), albedo_, mr.x);
             break;
         case MaterialKind::Mirror: f0_ = albedo_; break;
         case MaterialKind::Glass: break;

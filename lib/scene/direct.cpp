@@ -58,7 +58,7 @@ Vec3 directSamples(const RayAccel& accel, const LightSampler& lights, const Surf
         }
         const Material& m = scene.materials[hit.material];
         if (!m.isEmissive() || !hit.frontFace) continue;
-        sum += bs.weight * m.emission * emitterHitWeight(lights, bs.pdf, sp.p, hit);
+        sum += bs.weight * scene.emissionAt(hit.material, hit.attr) * emitterHitWeight(lights, bs.pdf, sp.p, hit);
     }
     return sum / float(n);
 }

@@ -13,7 +13,7 @@ namespace {
 
 const std::set<std::string> kSupportedExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
-    "KHR_materials_ior"};
+    "KHR_materials_ior", "KHR_texture_transform"};
 
 // Material extensions read past without being honoured: what each would add.
 const std::map<std::string, std::string> kIgnoredMaterialExtensions = {
@@ -71,6 +71,7 @@ Scene GltfLoader::loadAll() {
     if (sceneIndex >= int(model_.scenes.size())) fail("'scene' " + std::to_string(sceneIndex) + " does not exist");
     for (int root : model_.scenes[sceneIndex].nodes) visitNode(root, Mat4(1.f), 0);
     readEnvironment(model_.scenes[sceneIndex].extras, quoted("scene", sceneIndex, model_.scenes[sceneIndex].name));
+    computeMissingTangents(scene_);
 
     if (scene_.triangleCount() == 0) fail("the scene has no triangles");
     scene_.computeBounds();
@@ -196,11 +197,7 @@ void GltfLoader::visitNode(int index, const Mat4& parent, int depth) {
             const size_t triangles = scene_.triangleCount(), objects = scene_.objectNames.size();
             addMesh(node.mesh, world, where);
             scene_.portals.insert(scene_.portals.end(), scene_.positions.begin() + 3 * triangles, scene_.positions.end());
-            scene_.positions.resize(3 * triangles);
-            scene_.normals.resize(3 * triangles);
-            scene_.uvs.resize(3 * triangles);
-            scene_.triMaterial.resize(triangles);
-            scene_.triObject.resize(triangles);
+            scene_.keepTriangles(triangles);
             scene_.objectNames.resize(objects);
         } else {
             addMesh(node.mesh, world, where);

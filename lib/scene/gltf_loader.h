@@ -65,6 +65,10 @@ private:
     AnimationChannel loadChannel(const tinygltf::Animation& a, const tinygltf::AnimationChannel& ch, const std::string& where);
     // -- Materials, textures, KHR_lights_punctual (gltf_materials.cpp)
     void loadMaterials();
+    // A texture slot: the texture (loaded once per image and colour space), its uv set and its
+    // KHR_texture_transform.
+    TextureRef textureRef(int index, int texCoord, const tinygltf::ExtensionMap& extensions, const std::string& where,
+                          bool srgb);
     // The Scene::textures index of glTF texture `textureIndex`, one per (image, srgb): colour
     // textures (base colour, emission) are sRGB, data textures (normals, metallic-roughness)
     // linear. Only reserves the slot: decodeImages fills it.
@@ -95,6 +99,16 @@ private:
     void forEachSparseComponent(int index, const std::string& where, F&& f);
     const unsigned char* viewBytes(int view, size_t offset, size_t length, const std::string& what);
     void addMesh(int meshIndex, const Mat4& world, const std::string& nodeWhere);
+    // A primitive's optional vertex attributes, as the Scene keeps them: TEXCOORD_0, TEXCOORD_1
+    // (when a texture slot reads it), COLOR_0 (RGB given alpha 1) and TANGENT (when its
+    // material has a normal map); empty where the primitive has none.
+    struct VertexExtras {
+        std::vector<float> uv0, uv1, color, tangent;  // 2, 2, 4, 4 floats a vertex
+        bool keepUv1 = false, keepColors = false, keepTangents = false;
+        void toWorld(const glm::mat3& m, bool flip);
+        void push(Scene& s, uint32_t vertex) const;
+    };
+    VertexExtras readVertexExtras(const tinygltf::Primitive& prim, uint32_t material, size_t nv, const std::string& where);
     static std::vector<uint32_t> triangulate(const std::vector<uint32_t>& idx, int mode);
 
     std::string path_;
@@ -106,6 +120,8 @@ private:
     uint32_t defaultMaterial_ = 0;
     std::vector<PunctualLight> lightTemplates_;
     std::map<std::pair<int, bool>, int> textureOfImage_;  // (image, srgb) → Scene::textures index
+    bool usesTexCoord1_ = false;  // some texture slot reads TEXCOORD_1
+    bool needsTangents_ = false;  // some material has a normal map
     std::map<std::string, int> repeated_;  // warnings by kind
     std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
 };

@@ -1,5 +1,7 @@
-// The glTF loader's materials (the table of docs/design.md §3), textures and
-// KHR_lights_punctual lights (gltf_loader.h).
+// The glTF loader's materials (the table of docs/design.md §3): every texture slot of the
+// metallic-roughness model with KHR_texture_transform (occlusionTexture is left out on purpose:
+// global illumination computes what it approximates), textures and KHR_lights_punctual
+// lights (gltf_loader.h).
 #include "scene/gltf_loader.h"
 
 #include <cmath>
@@ -36,8 +38,16 @@ void GltfLoader::loadMaterials() {
             !std::isfinite(out.roughness) || !(out.ior >= 1.0f && out.ior < 10.f))
             fail(where + " has a non-finite or out-of-range factor");
         if (glm::any(glm::lessThan(out.emission, Vec3(0.f)))) fail(where + " has negative emission");
-        if (pbr.baseColorTexture.index >= 0)
-            out.baseColorTexture = loadTexture(pbr.baseColorTexture.index, where);
+        out.baseColorTexture = textureRef(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
+                                          pbr.baseColorTexture.extensions, where, true);
+        out.metallicRoughnessTexture = textureRef(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                                                  pbr.metallicRoughnessTexture.extensions, where, false);
+        out.normalTexture = textureRef(m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions, where, false);
+        out.normalScale = float(m.normalTexture.scale);
+        out.emissiveTexture = textureRef(m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions,
+                                         where, true);
+        if (!std::isfinite(out.normalScale)) fail(where + " has a non-finite normalTexture scale");
+        needsTangents_ = needsTangents_ || out.normalTexture.present();
         out.opacity = std::clamp(float(pbr.baseColorFactor.at(3)), 0.f, 1.f);
         out.alphaCutoff = float(m.alphaCutoff);
         if (m.alphaMode == "MASK") out.alphaMode = AlphaMode::Mask;
@@ -45,8 +55,6 @@ void GltfLoader::loadMaterials() {
         else if (m.alphaMode != "OPAQUE" && !m.alphaMode.empty()) fail(where + " has unknown alphaMode '" + m.alphaMode + "'");
         if (!std::isfinite(out.opacity) || !std::isfinite(out.alphaCutoff) || out.alphaCutoff < 0.f)
             fail(where + " has a non-finite alpha or a negative alphaCutoff");
-        if (m.emissiveTexture.index >= 0)
-            warn("materials with an emissiveTexture (ignored)", where + ": emissiveTexture is ignored (emissiveFactor used)");
 
         if (transmission > 0.f) {
             if (transmission < 1.f)
@@ -54,6 +62,7 @@ void GltfLoader::loadMaterials() {
                                " treated as " + (transmission >= 0.5f ? "1" : "0"));
         }
         if (transmission >= 0.5f) out.kind = MaterialKind::Glass;
+        else if (out.metallicRoughnessTexture.present()) out.kind = MaterialKind::Mix;  // varies over the surface
         else if (out.metallic >= 1.f) out.kind = out.roughness < 0.05f ? MaterialKind::Mirror : MaterialKind::Glossy;
         else if (out.metallic <= 0.f && out.roughness >= 1.f) out.kind = MaterialKind::Lambert;
         else out.kind = MaterialKind::Mix;
@@ -65,6 +74,46 @@ void GltfLoader::loadMaterials() {
     Material fallback;
     fallback.name = "default";
     scene_.materials.push_back(fallback);
+}
+
+TextureRef GltfLoader::textureRef(int index, int texCoord, const tinygltf::ExtensionMap& extensions,
+                                  const std::string& where, bool srgb) {
+    TextureRef ref;
+    if (index < 0) return ref;
+    ref.texture = loadTexture(index, where, srgb);
+    ref.texCoord = texCoord;
+    if (auto it = extensions.find("KHR_texture_transform"); it != extensions.end()) {
+        const tinygltf::Value& v = it->second;
+        const std::string twhere = where + ": texture " + std::to_string(index) + "'s KHR_texture_transform";
+        auto pair = [&](const char* key, Vec2& out) {
+            if (!v.Has(key)) return;
+            const tinygltf::Value& a = v.Get(key);
+            if (!a.IsArray() || a.ArrayLen() != 2 || !a.Get(0).IsNumber() || !a.Get(1).IsNumber())
+                fail(twhere + " has a " + key + " that is not two numbers");
+            out = Vec2(float(a.Get(0).GetNumberAsDouble()), float(a.Get(1).GetNumberAsDouble()));
+        };
+        pair("offset", ref.transform.offset);
+        pair("scale", ref.transform.scale);
+        if (v.Has("rotation")) {
+            if (!v.Get("rotation").IsNumber()) fail(twhere + " has a rotation that is not a number");
+            ref.transform.rotation = float(v.Get("rotation").GetNumberAsDouble());
+        }
+        if (v.Has("texCoord")) {
+            if (!v.Get("texCoord").IsInt()) fail(twhere + " has a texCoord that is not an integer");
+            ref.texCoord = v.Get("texCoord").GetNumberAsInt();
+        }
+        if (!isFinite(Vec3(ref.transform.offset, ref.transform.rotation)) || !isFinite(Vec3(ref.transform.scale, 0.f)))
+            fail(twhere + " has a non-finite offset, rotation or scale");
+    }
+    if (ref.texCoord < 0) fail(where + ": texture " + std::to_string(index) + " has a negative texCoord");
+    if (ref.texCoord > 1) {
+        warn("texture slots reading TEXCOORD_2 or above (TEXCOORD_0 read)",
+             where + ": texture " + std::to_string(index) + " reads TEXCOORD_" + std::to_string(ref.texCoord) +
+                 "; only TEXCOORD_0 and TEXCOORD_1 are read (TEXCOORD_0 used)");
+        ref.texCoord = 0;
+    }
+    usesTexCoord1_ = usesTexCoord1_ || ref.texCoord == 1;
+    return ref;
 }
 
 int GltfLoader::loadTexture(int textureIndex, const std::string& where, bool srgb) {

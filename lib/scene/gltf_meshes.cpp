@@ -143,22 +143,17 @@ void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& no
         if (pos == prim.attributes.end()) fail(where + " has no POSITION attribute");
         std::vector<float> p = readFloats(pos->second, 3, where);
         size_t nv = p.size() / 3;
-        std::vector<float> nrm, uv;
+        std::vector<float> nrm;
         if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
             nrm = readFloats(it->second, 3, where);
             if (nrm.size() != p.size()) fail(where + ": NORMAL and POSITION counts differ");
         }
-        int texCoord = 0;
         uint32_t material = defaultMaterial_;
         if (prim.material >= 0) {
             if (prim.material >= int(model_.materials.size())) fail(where + " references material " + std::to_string(prim.material) + " which does not exist");
             material = uint32_t(prim.material);
-            texCoord = model_.materials[prim.material].pbrMetallicRoughness.baseColorTexture.texCoord;
         }
-        if (auto it = prim.attributes.find("TEXCOORD_" + std::to_string(texCoord)); it != prim.attributes.end()) {
-            uv = readFloats(it->second, 2, where);
-            if (uv.size() / 2 != nv) fail(where + ": TEXCOORD and POSITION counts differ");
-        }
+        VertexExtras extra = readVertexExtras(prim, material, nv, where);
 
         std::vector<uint32_t> idx;
         if (prim.indices >= 0) {
@@ -179,6 +174,7 @@ void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& no
             wp[v] = Vec3(world * Vec4(q, 1.f));
             if (!nrm.empty()) wn[v] = normalMatrix * Vec3(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]);
         }
+        extra.toWorld(glm::mat3(world), flip);
 
         uint32_t object = uint32_t(scene_.objectNames.size());
         scene_.objectNames.push_back(where);
@@ -196,12 +192,78 @@ void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& no
                     if (std::isfinite(len) && len > 1e-12f) n = wn[i] / len;
                 }
                 scene_.normals.push_back(n);
-                scene_.uvs.push_back(uv.empty() ? Vec2(0.f) : Vec2(uv[2 * i], uv[2 * i + 1]));
+                extra.push(scene_, i);
             }
             scene_.triMaterial.push_back(material);
             scene_.triObject.push_back(object);
         }
     }
+}
+
+GltfLoader::VertexExtras GltfLoader::readVertexExtras(const tinygltf::Primitive& prim, uint32_t material, size_t nv,
+                                                     const std::string& where) {
+    VertexExtras x;
+    auto attribute = [&](const char* name) {
+        auto it = prim.attributes.find(name);
+        return it == prim.attributes.end() ? -1 : it->second;
+    };
+    auto read = [&](const char* name, int n, std::vector<float>& out) {
+        const int a = attribute(name);
+        if (a < 0) return;
+        out = readFloats(a, n, where);
+        if (out.size() != nv * size_t(n)) fail(where + ": " + name + " and POSITION counts differ");
+    };
+    read("TEXCOORD_0", 2, x.uv0);
+    x.keepUv1 = usesTexCoord1_;
+    if (x.keepUv1) read("TEXCOORD_1", 2, x.uv1);
+    if (const int a = attribute("COLOR_0"); a >= 0) {
+        const tinygltf::Accessor& acc = accessor(a, where);
+        const int n = tinygltf::GetNumComponentsInType(acc.type);
+        if ((n != 3 && n != 4) || (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT &&
+                                   acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                                   acc.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))
+            fail(where + ": COLOR_0 " + quoted("accessor", a, acc.name) + " is not VEC3 or VEC4 of floats, bytes or shorts");
+        std::vector<float> c;
+        read("COLOR_0", n, c);
+        x.color.assign(4 * nv, 1.f);
+        for (size_t v = 0; v < nv; ++v)
+            for (int k = 0; k < n; ++k) x.color[4 * v + size_t(k)] = c[size_t(n) * v + size_t(k)];
+        for (float f : x.color)
+            if (!(f >= 0.f && f <= 1e30f)) fail(where + ": COLOR_0 has a negative or non-finite value");
+        // COLOR_0 is kept from the first primitive that has it on; the earlier ones are white.
+        if (scene_.colors.empty()) scene_.colors.assign(scene_.positions.size(), Vec4(1.f));
+    }
+    x.keepColors = !scene_.colors.empty() || !x.color.empty();
+    x.keepTangents = needsTangents_;
+    if (const int a = attribute("TANGENT"); a >= 0) {
+        const tinygltf::Accessor& acc = accessor(a, where);
+        if (acc.type != TINYGLTF_TYPE_VEC4 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT)
+            fail(where + ": TANGENT " + quoted("accessor", a, acc.name) + " is not VEC4 of floats");
+        if (x.keepTangents && material < model_.materials.size() && model_.materials[material].normalTexture.index >= 0)
+            read("TANGENT", 4, x.tangent);
+    }
+    return x;
+}
+
+// Tangents turn with the node (they lie in the surface, unlike normals); a mirroring node
+// turns the bitangent's side. A tangent that is zero or not finite is left to be computed.
+void GltfLoader::VertexExtras::toWorld(const glm::mat3& m, bool flip) {
+    for (size_t v = 0; 4 * v < tangent.size(); ++v) {
+        float* t = &tangent[4 * v];
+        const Vec3 w = m * Vec3(t[0], t[1], t[2]);
+        const float len = glm::length(w);
+        const bool ok = std::isfinite(len) && len > 1e-12f && std::isfinite(t[3]);
+        const Vec3 unit = ok ? w / len : Vec3(0.f);
+        t[0] = unit.x, t[1] = unit.y, t[2] = unit.z;
+        t[3] = !ok ? 0.f : (t[3] < 0.f) != flip ? -1.f : 1.f;
+    }
+}
+
+void GltfLoader::VertexExtras::push(Scene& s, uint32_t i) const {
+    s.uvs.push_back(uv0.empty() ? Vec2(0.f) : Vec2(uv0[2 * i], uv0[2 * i + 1]));
+    if (keepUv1) s.uvs1.push_back(uv1.empty() ? Vec2(0.f) : Vec2(uv1[2 * i], uv1[2 * i + 1]));
+    if (keepColors) s.colors.push_back(color.empty() ? Vec4(1.f) : Vec4(color[4 * i], color[4 * i + 1], color[4 * i + 2], color[4 * i + 3]));
+    if (keepTangents) s.tangents.push_back(tangent.empty() ? Vec4(0.f) : Vec4(tangent[4 * i], tangent[4 * i + 1], tangent[4 * i + 2], tangent[4 * i + 3]));
 }
 
 std::vector<uint32_t> GltfLoader::triangulate(const std::vector<uint32_t>& idx, int mode) {

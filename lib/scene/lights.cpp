@@ -22,7 +22,7 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
     for (size_t t = 0; t < scene.triangleCount(); ++t) {
         const Material& m = scene.materials[scene.triMaterial[t]];
         if (!m.isEmissive()) continue;
-        float power = luminance(m.emission) * kPi * scene.triangleArea(t);
+        float power = luminance(scene.meanEmission(t)) * kPi * scene.triangleArea(t);
         if (!(power > 0.f)) continue;
         entryOfTriangle_[t] = int32_t(entries_.size());
         entries_.push_back({Kind::Area, uint32_t(t), power});
@@ -137,7 +137,7 @@ LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
         s.wi = d / s.dist;
         float cosL = -glm::dot(s.wi, scene_.geometricNormal(e.index));
         if (cosL <= 0.f) return s;  // the back of an emitter is dark
-        s.radiance = scene_.materials[scene_.triMaterial[e.index]].emission;
+        s.radiance = scene_.emissionAt(scene_.triMaterial[e.index], scene_.attributesAt(e.index, b.x, b.y));
         s.pdf = prob * dist2 / (cosL * scene_.triangleArea(e.index));
         return s;
     }
@@ -214,7 +214,7 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
         s.pdfDir = local.z * kInvPi;
         s.pdfChoicePos = prob / area;
         // Le·cos / (pChoice · 1/A · cos/π) = Le·π·A / pChoice
-        s.flux = scene_.materials[scene_.triMaterial[e.index]].emission * (kPi * area / prob);
+        s.flux = scene_.emissionAt(scene_.triMaterial[e.index], scene_.attributesAt(e.index, b.x, b.y)) * (kPi * area / prob);
         return s;
     }
     const PunctualLight& l = scene_.lights[e.index];

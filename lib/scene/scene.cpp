@@ -45,25 +45,11 @@ float Scene::triangleArea(size_t tri) const {
     return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
 }
 
-Vec3 Scene::albedo(uint32_t material, Vec2 uv, float uvFootprint) const {
-    const Material& m = materials[material];
-    if (m.baseColorTexture < 0) return m.baseColor;
-    const Texture& t = textures[size_t(m.baseColorTexture)];
-    return m.baseColor * Vec3(t.sample(uv, t.lodOf(uvFootprint)));
-}
-
 float Scene::uvPerWorld(size_t tri) const {
     const Vec2* uv = &uvs[3 * tri];
     const Vec2 a = uv[1] - uv[0], b = uv[2] - uv[0];
     const float uvArea = 0.5f * std::abs(a.x * b.y - a.y * b.x), area = triangleArea(tri);
     return area > 0.f ? std::sqrt(uvArea / area) : 0.f;
-}
-
-float Scene::alphaAt(uint32_t material, Vec2 uv) const {
-    const Material& m = materials[material];
-    if (m.baseColorTexture < 0) return m.opacity;
-    const Texture& t = textures[size_t(m.baseColorTexture)];
-    return t.hasAlpha() ? m.opacity * t.alphaAt(t.texelAt(uv)) : m.opacity;
 }
 
 bool Scene::hasCutouts() const {
@@ -75,8 +61,7 @@ bool Scene::hasCutouts() const {
 bool Scene::solidAt(uint32_t tri, float b1, float b2, float u) const {
     const Material& m = materials[triMaterial[tri]];
     if (m.alphaMode == AlphaMode::Opaque) return true;
-    const Vec2 uv = (1.f - b1 - b2) * uvs[3 * tri] + b1 * uvs[3 * tri + 1] + b2 * uvs[3 * tri + 2];
-    const float a = alphaAt(triMaterial[tri], uv);
+    const float a = alphaAt(triMaterial[tri], attributesAt(tri, b1, b2));
     return m.alphaMode == AlphaMode::Mask ? a >= m.alphaCutoff : u < a;
 }
 
@@ -114,7 +99,7 @@ Camera Scene::camera(const std::string& which) const {
 Vec3 Scene::emittedPower() const {
     Vec3 total(0.f);
     for (size_t t = 0; t < triangleCount(); ++t)
-        total += materials[triMaterial[t]].emission * kPi * triangleArea(t);
+        if (materials[triMaterial[t]].isEmissive()) total += meanEmission(t) * kPi * triangleArea(t);
     for (const PunctualLight& l : lights) total += l.power(l.intensity, 0.5f * bounds.diagonal());
     return total;
 }

@@ -21,6 +21,28 @@ const char* materialKindName(MaterialKind kind);
 // of itself, so a render stays deterministic).
 enum class AlphaMode { Opaque, Mask, Blend };
 
+// KHR_texture_transform: uv' = offset + R(rotation)·(scale ⊙ uv), R turning the uvs
+// counter-clockwise in the image (u' = u cos + v sin, v' = −u sin + v cos, as the extension's
+// example of the rotated lower-left quadrant needs).
+struct TextureTransform {
+    Vec2 offset{0.f}, scale{1.f};
+    float rotation = 0.f;  // radians
+
+    Vec2 apply(Vec2 uv) const;
+};
+
+// One texture slot of a material: which texture, read through which uv set and transform.
+struct TextureRef {
+    int texture = -1;  // index into Scene::textures, or -1: none
+    int texCoord = 0;  // TEXCOORD_0 or TEXCOORD_1
+    TextureTransform transform;
+
+    bool present() const { return texture >= 0; }
+};
+
+// The glTF 2.0 metallic-roughness model (docs/design.md §3). Each value is its factor times its
+// texture where it has one: base colour (× COLOR_0), metallic (B) and roughness (G) of the
+// metallicRoughnessTexture, the tangent-space normal map, emission (emissiveTexture).
 struct Material {
     std::string name;
     MaterialKind kind = MaterialKind::Lambert;
@@ -28,8 +50,12 @@ struct Material {
     float metallic = 0.f;
     float roughness = 1.f;
     float ior = 1.5f;
-    int baseColorTexture = -1;  // index into Scene::textures, or -1
-    Vec3 emission{0.f};         // radiance of the front face, W/(m²·sr)
+    TextureRef baseColorTexture;         // sRGB; its alpha is the surface's alpha
+    TextureRef metallicRoughnessTexture;  // linear: B metal, G rough
+    TextureRef normalTexture;             // linear, tangent space, +Y towards the image's top
+    float normalScale = 1.f;              // scales the map's X and Y
+    TextureRef emissiveTexture;           // sRGB, times emission
+    Vec3 emission{0.f};         // radiance of the front face, W/(m²·sr): emissiveFactor × strength
     AlphaMode alphaMode = AlphaMode::Opaque;
     float opacity = 1.f;        // baseColorFactor's alpha
     float alphaCutoff = 0.5f;   // MASK
@@ -37,6 +63,12 @@ struct Material {
     bool isEmissive() const { return !isBlack(emission); }
     bool isSpecular() const { return kind == MaterialKind::Glass || kind == MaterialKind::Mirror; }
     float alpha() const { return std::max(roughness * roughness, 1e-3f); }  // GGX α
+};
+
+// What a material reads at a point of a triangle: its interpolated vertex attributes.
+struct ShadingAttributes {
+    Vec2 uv[2] = {Vec2(0.f), Vec2(0.f)};  // TEXCOORD_0, TEXCOORD_1
+    Vec4 color{1.f};                       // COLOR_0 (RGBA, linear)
 };
 
 enum class LightType { Point, Spot, Directional };
@@ -88,7 +120,13 @@ struct Scene {
     // Triangle soup in world space: triangle t has vertices 3t, 3t+1, 3t+2.
     std::vector<Vec3> positions;
     std::vector<Vec3> normals;  // shading normals, unit (geometric normal where the file had none)
-    std::vector<Vec2> uvs;      // (0,0) where the file had none
+    std::vector<Vec2> uvs;      // TEXCOORD_0, (0,0) where the file had none
+    // Kept only when a file uses them (else empty): TEXCOORD_1 ((0,0) where a primitive has
+    // none), COLOR_0 (RGBA, (1,1,1,1) where a primitive has none) and tangents (xyz unit, w the
+    // handedness ±1: bitangent = cross(normal, tangent)·w), for the triangles with a normal map.
+    std::vector<Vec2> uvs1;
+    std::vector<Vec4> colors;
+    std::vector<Vec4> tangents;
     std::vector<uint32_t> triMaterial;
     std::vector<uint32_t> triObject;  // index into objectNames: "mesh 'name' (node 'name')"
     std::vector<std::string> objectNames;
@@ -116,14 +154,36 @@ struct Scene {
     size_t triangleCount() const { return triMaterial.size(); }
     Vec3 geometricNormal(size_t tri) const;  // unit, from the counter-clockwise winding
     float triangleArea(size_t tri) const;
-    // Base colour at a surface point: factor × texture, filtered over a footprint `uvFootprint`
-    // wide in uv units (SurfacePoint::uvFootprint; 0: bilinear in the full-size image).
-    Vec3 albedo(uint32_t material, Vec2 uv, float uvFootprint = 0.f) const;
+    // -- Materials at a surface point (shading.cpp)
+    // The vertex attributes of triangle `tri` at barycentrics (b1, b2).
+    ShadingAttributes attributesAt(uint32_t tri, float b1, float b2) const;
+    // The uv at which slot `ref` reads its texture: its uv set, transformed.
+    static Vec2 textureUv(const TextureRef& ref, const ShadingAttributes& a) {
+        return ref.transform.apply(a.uv[ref.texCoord]);
+    }
+    // The uv of slot `ref` at corner k of triangle `tri`: the transform is affine, so these
+    // interpolate to textureUv across the triangle.
+    Vec2 cornerTextureUv(const TextureRef& ref, size_t tri, int k) const;
+    // Base colour at a surface point: factor × texture × COLOR_0, the texture filtered over a
+    // footprint `uvFootprint` wide in uv units (SurfacePoint::uvFootprint; 0: bilinear in the
+    // full-size image).
+    Vec3 albedo(uint32_t material, const ShadingAttributes& a, float uvFootprint = 0.f) const;
     // uv units per world unit on triangle tri: the square root of its uv area over its area
     // (0 where the uvs are degenerate). A footprint w wide on the surface is w × this in uv.
     float uvPerWorld(size_t tri) const;
-    // Alpha at a surface point: factor × the level-0 texel's alpha.
-    float alphaAt(uint32_t material, Vec2 uv) const;
+    // Alpha at a surface point: factor × the texel's alpha × COLOR_0's.
+    float alphaAt(uint32_t material, const ShadingAttributes& a) const;
+    // (metallic, roughness) at a surface point: the factors × the texture's B and G.
+    Vec2 metallicRoughness(uint32_t material, const ShadingAttributes& a) const;
+    // Emitted radiance of the front face at a surface point: emission × the emissive texture.
+    Vec3 emissionAt(uint32_t material, const ShadingAttributes& a) const;
+    // The mean emitted radiance over triangle `tri` (its texture averaged over the triangle).
+    Vec3 meanEmission(size_t tri) const;
+    // The shading normal of triangle `tri` at (b1, b2): the interpolated normal, turned by the
+    // material's normal map where it has one. Unit; not yet checked against the geometric side.
+    Vec3 shadingNormalAt(uint32_t tri, float b1, float b2, const ShadingAttributes& a) const;
+    // Keeps the first n triangles (every per-corner array with them).
+    void keepTriangles(size_t n);
     // Whether any material cuts its surface (alphaMode MASK or BLEND).
     bool hasCutouts() const;
     // Whether triangle `tri` is there at barycentrics (b1, b2) for a ray whose own random number
@@ -133,11 +193,15 @@ struct Scene {
     // `cameras`, tried in that order), or the first, or one framing the bounds.
     Camera camera(const std::string& which = "") const;
     // Total flux emitted by area and punctual lights, W (directional lights count over the
-    // scene's bounding-sphere disc).
+    // scene's bounding-sphere disc); textured emitters by their texture's mean.
     Vec3 emittedPower() const;
 
     void computeBounds();
 };
+
+// Fills the tangents of the triangles whose material has a normal map and whose tangents are
+// missing (w = 0), MikkTSpace's way (tangents.cpp).
+void computeMissingTangents(Scene& scene);
 
 // Loads a .gltf or .glb file, decoding its images on `threads` threads (0: one per hardware
 // thread); with `pose` (SceneAnimation::pose), the nodes flattened as posed. Throws

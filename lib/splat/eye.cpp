@@ -18,7 +18,7 @@ namespace {
 // A material that reflects nothing (the black base of an area light) receives no photon
 // energy: no eye sample is stored for it.
 bool reflectsNothing(const Material& m) {
-    return m.kind == MaterialKind::Lambert && m.baseColorTexture < 0 && isBlack(m.baseColor);
+    return m.kind == MaterialKind::Lambert && !m.baseColorTexture.present() && isBlack(m.baseColor);
 }
 
 // Follows a camera ray of weight `weight` (and footprint `cone`) through specular surfaces to the first non-specular
@@ -37,7 +37,7 @@ void followCameraRay(const Scene& scene, const RayAccel& accel, const Environmen
         }
         cone.footprintAt(sp, scene, t, d);
         const Material& m = scene.materials[sp.material];
-        if (m.isEmissive() && sp.frontFace) emission += weight * m.emission;
+        if (m.isEmissive() && sp.frontFace) emission += weight * scene.emissionAt(sp.material, sp.attr);
         const Vec3 wo = -d;
         Bsdf bsdf(scene, sp, wo);
         if (!bsdf.isDelta()) {
