@@ -13,6 +13,7 @@
 #include "occlusion/kdtree.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "core/sampling.h"
 #include "splat/photons.h"
 #include "render.h"
 #include "splat/splat.h"
@@ -180,6 +181,50 @@ TEST(SealedRooms, DarkRoomStaysBlackAtEveryGrid) {
             EXPECT_GT(litMean, 0.0) << where;
             EXPECT_LT(darkMean, 1e-4 * litMean) << where;
         }
+    }
+}
+
+// The sealed rooms with a bumpy normal map on every surface (16 × 16 texels tilted up to 60°
+// in random directions, 4 texels a metre, tangents computed): shading normals that lean
+// through the wall must not let light through it. The dark room stays black as without the
+// map, at the default grid with the mask and with rays.
+TEST(SealedRooms, NormalMappedWallsKeepTheDarkRoomBlack) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/two_rooms_sealed.gltf", silentReporter());
+    const RenderResult flat = render(scene, roomConfig(192, "lit_camera", Visibility::Mask), silentReporter());
+    std::vector<Vec4> bumps;
+    uint64_t h = 7;
+    for (int i = 0; i < 16 * 16; ++i) {
+        h = mix64(h + 1);
+        const float phi = 2.f * kPi * toUnitFloat(uint32_t(h)), theta = 1.047f * toUnitFloat(uint32_t(h >> 32));
+        const Vec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        bumps.push_back(Vec4(0.5f * n + 0.5f, 1.f));
+    }
+    const int tex = addTexture(scene, 16, 16, bumps);
+    for (Material& m : scene.materials) m.normalTexture.texture = tex;
+    for (size_t c = 0; c < scene.positions.size(); ++c) {
+        // Planar uvs across the triangle's dominant axis, so that every wall has a frame.
+        const Vec3 n = glm::abs(scene.geometricNormal(c / 3)), p = scene.positions[c] * 0.25f;
+        scene.uvs[c] = n.x > n.y && n.x > n.z ? Vec2(p.y, p.z) : n.y > n.z ? Vec2(p.x, p.z) : Vec2(p.x, p.y);
+    }
+    scene.tangents.assign(scene.positions.size(), Vec4(0.f));
+    computeMissingTangents(scene);
+    for (Visibility visibility : {Visibility::Mask, Visibility::Rays}) {
+        RenderResult dark = render(scene, roomConfig(192, "camera", visibility), silentReporter());
+        RenderResult lit = render(scene, roomConfig(192, "lit_camera", visibility), silentReporter());
+        for (int layer : {kDirect, kIndirect, kCaustic}) {
+            double litMean = layerMean(lit.film, layer), darkMean = layerMean(dark.film, layer);
+            const std::string where = std::string(layerName(layer)) + ", " + visibilityName(visibility);
+            EXPECT_GT(litMean, 0.0) << where;
+            EXPECT_LT(darkMean, 1e-4 * litMean) << where;
+        }
+        if (visibility != Visibility::Mask) continue;
+        // The map is there: the lit room's pixels differ from the flat walls'.
+        double change = 0.0;
+        for (size_t p = 0; p < lit.film.pixelCount(); ++p)
+            change += glm::length(lit.film.layers[kDirect][p] - flat.film.layers[kDirect][p]);
+        EXPECT_GT(change / double(lit.film.pixelCount()), 0.05 * layerMean(flat.film, kDirect));
     }
 }
 
