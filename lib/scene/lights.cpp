@@ -26,6 +26,7 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         if (!(power > 0.f)) continue;
         entryOfTriangle_[t] = int32_t(entries_.size());
         entries_.push_back({Kind::Area, uint32_t(t), power});
+        buildTexelGrid(entries_.back());
     }
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const PunctualLight& l = scene.lights[i];
@@ -59,6 +60,65 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         cdf_.push_back(float(acc / total));
     }
     if (!cdf_.empty()) cdf_.back() = 1.f;
+}
+
+void LightSampler::buildTexelGrid(Entry& e) {
+    const uint32_t material = scene_.triMaterial[e.index];
+    const TextureRef& ref = scene_.materials[material].emissiveTexture;
+    if (!ref.present()) return;
+    // As many cells as the triangle spans texels, up to kMaxGridSide².
+    const Texture& tex = scene_.textures[size_t(ref.texture)];
+    const Vec2 a = scene_.cornerTextureUv(ref, e.index, 1) - scene_.cornerTextureUv(ref, e.index, 0);
+    const Vec2 b = scene_.cornerTextureUv(ref, e.index, 2) - scene_.cornerTextureUv(ref, e.index, 0);
+    const float texels = 0.5f * std::abs(a.x * b.y - a.y * b.x) * float(tex.width()) * float(tex.height());
+    const int side = std::clamp(int(4.f * std::sqrt(std::min(texels, 1e6f))), 1, kMaxGridSide);
+    if (side < 2) return;
+    // Each cell's luminance from 2 × 2 points in it.
+    std::vector<double> w(size_t(side) * size_t(side));
+    double sum = 0.0;
+    for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+            double l = 0.0;
+            for (int k = 0; k < 4; ++k) {
+                const Vec2 q((float(x) + 0.25f + 0.5f * float(k & 1)) / float(side), (float(y) + 0.25f + 0.5f * float(k >> 1)) / float(side));
+                const Vec2 bc = sampleUniformTriangle(q);
+                l += double(luminance(scene_.emissionAt(material, scene_.attributesAt(e.index, bc.x, bc.y))));
+            }
+            w[size_t(y * side + x)] = l;
+            sum += l;
+        }
+    const double floor = sum > 0.0 ? kGridFloor * sum / double(w.size()) : 1.0;
+    double total = 0.0;
+    for (double& v : w) total += (v = std::max(v, floor));
+    e.gridSide = uint32_t(side);
+    e.gridFirst = uint32_t(cellCdf_.size());
+    double acc = 0.0;
+    for (double v : w) cellCdf_.push_back(float((acc += v) / total));
+    cellCdf_.back() = 1.f;
+}
+
+Vec2 LightSampler::sampleOnEmitter(const Entry& e, Vec2 u, float& density) const {
+    density = 1.f;
+    if (e.gridSide == 0) return sampleUniformTriangle(u);
+    const size_t n = size_t(e.gridSide) * e.gridSide;
+    const float* cdf = &cellCdf_[e.gridFirst];
+    const size_t c = std::min(size_t(std::upper_bound(cdf, cdf + n, u.x) - cdf), n - 1);
+    const float lo = c ? cdf[c - 1] : 0.f, p = cdf[c] - lo;
+    const float within = p > 0.f ? std::clamp((u.x - lo) / p, 0.f, 0x1.fffffep-1f) : 0.5f;
+    density = p * float(n);
+    const float side = float(e.gridSide);
+    return sampleUniformTriangle(Vec2((float(c % e.gridSide) + within) / side, (float(c / e.gridSide) + u.y) / side));
+}
+
+float LightSampler::densityOnEmitter(const Entry& e, Vec2 b) const {
+    if (e.gridSide == 0) return 1.f;
+    // sampleUniformTriangle's inverse: u.x = (1 − b1)², u.y = b2 / (1 − b1).
+    const float s = std::clamp(1.f - b.x, 0.f, 1.f);
+    const float qx = s * s, qy = s > 0.f ? std::clamp(b.y / s, 0.f, 1.f) : 0.f;
+    const uint32_t side = e.gridSide, x = std::min(uint32_t(qx * float(side)), side - 1);
+    const uint32_t y = std::min(uint32_t(qy * float(side)), side - 1), c = y * side + x;
+    const float* cdf = &cellCdf_[e.gridFirst];
+    return (cdf[c] - (c ? cdf[c - 1] : 0.f)) * float(side * side);
 }
 
 size_t LightSampler::choose(float u, float& prob) const {
@@ -128,7 +188,8 @@ LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
     }
     if (e.kind == Kind::Area) {
         const Vec3* v = &scene_.positions[3 * e.index];
-        Vec2 b = sampleUniformTriangle(u);
+        float density;
+        const Vec2 b = sampleOnEmitter(e, u, density);
         Vec3 pl = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
         Vec3 d = pl - p;
         float dist2 = glm::dot(d, d);
@@ -138,7 +199,7 @@ LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
         float cosL = -glm::dot(s.wi, scene_.geometricNormal(e.index));
         if (cosL <= 0.f) return s;  // the back of an emitter is dark
         s.radiance = scene_.emissionAt(scene_.triMaterial[e.index], scene_.attributesAt(e.index, b.x, b.y));
-        s.pdf = prob * dist2 / (cosL * scene_.triangleArea(e.index));
+        s.pdf = prob * density * dist2 / (cosL * scene_.triangleArea(e.index));
         return s;
     }
     const PunctualLight& l = scene_.lights[e.index];
@@ -167,7 +228,17 @@ float LightSampler::pdfLi(const Vec3& p, uint32_t tri, const Vec3& pl) const {
     float dist2 = glm::dot(d, d);
     float cosL = std::abs(glm::dot(d, scene_.geometricNormal(tri))) / std::sqrt(dist2);
     if (cosL <= 0.f) return 0.f;
-    return prob * dist2 / (cosL * scene_.triangleArea(tri));
+    float density = 1.f;
+    if (entries_[size_t(e)].gridSide > 0) {
+        // pl's barycentrics on the triangle.
+        const Vec3* v = &scene_.positions[3 * size_t(tri)];
+        const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0], q = pl - v[0];
+        const float d00 = glm::dot(e1, e1), d01 = glm::dot(e1, e2), d11 = glm::dot(e2, e2);
+        const float d20 = glm::dot(q, e1), d21 = glm::dot(q, e2), den = d00 * d11 - d01 * d01;
+        if (den > 0.f)
+            density = densityOnEmitter(entries_[size_t(e)], Vec2((d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den));
+    }
+    return prob * density * dist2 / (cosL * scene_.triangleArea(tri));
 }
 
 EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const {
@@ -204,7 +275,8 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
     if (e.kind == Kind::Area) {
         // Uniform point on the triangle, cosine-weighted direction around its front normal.
         const Vec3* v = &scene_.positions[3 * e.index];
-        Vec2 b = sampleUniformTriangle(uPos);
+        float density;
+        const Vec2 b = sampleOnEmitter(e, uPos, density);
         Vec3 n = scene_.geometricNormal(e.index);
         s.origin = (1.f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
         s.normal = n;
@@ -212,9 +284,10 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
         s.dir = Frame(n).toWorld(local);
         float area = scene_.triangleArea(e.index);
         s.pdfDir = local.z * kInvPi;
-        s.pdfChoicePos = prob / area;
-        // Le·cos / (pChoice · 1/A · cos/π) = Le·π·A / pChoice
-        s.flux = scene_.emissionAt(scene_.triMaterial[e.index], scene_.attributesAt(e.index, b.x, b.y)) * (kPi * area / prob);
+        s.pdfChoicePos = prob * density / area;
+        // Le·cos / (pChoice · density/A · cos/π) = Le·π·A / (pChoice · density)
+        s.flux = scene_.emissionAt(scene_.triMaterial[e.index], scene_.attributesAt(e.index, b.x, b.y)) *
+                 (kPi * area / (prob * density));
         return s;
     }
     const PunctualLight& l = scene_.lights[e.index];

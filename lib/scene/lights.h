@@ -58,7 +58,20 @@ private:
         Kind kind = Kind::Area;
         uint32_t index = 0;  // triangle or punctual light
         float power = 0.f;
+        // A textured emitter's texel grid (cellCdf_[gridFirst, gridFirst + gridSide²)); side 0:
+        // points uniform over the triangle.
+        uint32_t gridSide = 0, gridFirst = 0;
     };
+    // A textured emitter's points follow its texels: a grid of cells over the unit square that
+    // sampleUniformTriangle maps onto the triangle (preserving area), each cell chosen by the
+    // luminance of its emission, floored at kGridFloor of the mean cell so that no emitting
+    // point is left out (the estimate stays unbiased), the point uniform within its cell.
+    static constexpr int kMaxGridSide = 32;
+    static constexpr float kGridFloor = 0.05f;
+    void buildTexelGrid(Entry& e);
+    // Barycentrics of a point on entry e's triangle, and its density relative to uniform.
+    Vec2 sampleOnEmitter(const Entry& e, Vec2 u, float& density) const;
+    float densityOnEmitter(const Entry& e, Vec2 b) const;
     float probability(size_t entry) const { return cdf_[entry] - (entry ? cdf_[entry - 1] : 0.f); }
     size_t choose(float u, float& prob) const;
     // Σ A·|n·d| over the portal triangles: their area seen along d.
@@ -71,6 +84,7 @@ private:
     std::vector<Entry> entries_;
     std::vector<float> cdf_;              // normalised, cdf_.back() == 1
     std::vector<int32_t> entryOfTriangle_;  // -1 for non-emissive triangles
+    std::vector<float> cellCdf_;           // the texel grids, each normalised
     const Environment* environment_ = nullptr;
     struct PortalTriangle {
         Vec3 v0, v1, v2;
