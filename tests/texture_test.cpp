@@ -151,7 +151,7 @@ protected:
             for (int x = 0; x < n; ++x)
                 for (int c = 0; c < 4; ++c) rgba[4 * (size_t(y) * n + size_t(x)) + size_t(c)] = ((x + y) % 2 || c == 3) ? 255 : 0;
         s.textures.push_back(Texture("checker", n, n, rgba.data(), true, false));
-        s.materials[m].baseColorTexture = 0;
+        s.materials[m].baseColorTexture.texture = 0;
         const float z = zChecker, e = 0.6f;
         if (flipped) test::addQuad(s, {-e, -e, z}, {-e, e, z}, {e, e, z}, {e, -e, z}, m);
         else test::addQuad(s, {-e, -e, z}, {e, -e, z}, {e, e, z}, {-e, e, z}, m);
