@@ -27,6 +27,7 @@ inline bool isBlack(const Vec3& c) { return c.x <= 0.f && c.y <= 0.f && c.z <= 0
 inline bool isFinite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
+inline bool isFinite(const Vec4& v) { return isFinite(Vec3(v)) && std::isfinite(v.w); }
 inline float sqr(float x) { return x * x; }
 // int(std::floor(x)) for finite x inside int's range, without the library call or rounding
 // mode change that floor costs where SSE4.1 is not assumed.

@@ -8,12 +8,6 @@
 
 namespace rs::gltf {
 
-namespace {
-
-bool isFinite4(const Vec4& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w); }
-
-}  // namespace
-
 void GltfLoader::loadNodeHierarchy() {
     SceneAnimation& a = scene_.animation;
     const int count = int(model_.nodes.size());
@@ -120,7 +114,7 @@ AnimationChannel GltfLoader::loadChannel(const tinygltf::Animation& a, const tin
     const std::vector<float> flat = readFloats(s.output, n, samplerWhere + " output");
     for (size_t k = 0; k < output.count; ++k) {
         Vec4 v(flat[k * n], flat[k * n + 1], flat[k * n + 2], n == 4 ? flat[k * n + 3] : 0.f);
-        if (!isFinite4(v)) fail(samplerWhere + ": output value " + std::to_string(k) + " is not finite");
+        if (!isFinite(v)) fail(samplerWhere + ": output value " + std::to_string(k) + " is not finite");
         const bool isValue = stride == 1 || k % 3 == 1;
         if (n == 4 && isValue && glm::dot(v, v) < 1e-12f) fail(samplerWhere + ": output value " + std::to_string(k) + " is a zero quaternion");
         if (n == 4 && isValue) v = glm::normalize(v);
