@@ -46,13 +46,7 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
     selected_ = animation.select(cfg.animation, cfg.scene);
     camerasOnly_ = animation.movesOnlyCameras(selected_);
     if (camerasOnly_ && cfg.splats()) store_ = std::make_unique<PhotonStore>();
-    // The camera `camera` picks (it throws naming it when there is none), found in the file's list.
-    const Camera chosen = rest_.camera(cfg.camera);
-    for (int i = 0; i < int(rest_.cameras.size()) && cameraIndex_ < 0; ++i) {
-        const Camera& c = rest_.cameras[i];
-        if (c.name == chosen.name && c.node == chosen.node && c.position == chosen.position && c.forward == chosen.forward)
-            cameraIndex_ = i;
-    }
+    cameraIndex_ = rest_.cameraIndex(cfg.camera);  // throws naming it when there is none
 
     // What the range shows that the user may not expect: warnings, once.
     if (!animation.unsupported.empty())

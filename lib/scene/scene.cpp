@@ -65,26 +65,29 @@ bool Scene::solidAt(uint32_t tri, float b1, float b2, float u) const {
     return m.alphaMode == AlphaMode::Mask ? a >= m.alphaCutoff : u < a;
 }
 
-Camera Scene::camera(const std::string& which) const {
-    if (!which.empty()) {
-        // Exporters often leave cameras unnamed (Blender names the node, not the camera): the
-        // camera's name first, then its node's, then its index.
-        for (const Camera& c : cameras)
-            if (c.name == which) return c;
-        for (const Camera& c : cameras)
-            if (c.node == which) return c;
-        if (which.find_first_not_of("0123456789") == std::string::npos && which.size() < 10) {
-            const size_t index = std::stoul(which);
-            if (index < cameras.size()) return cameras[index];
-        }
-        std::string known;
-        for (size_t i = 0; i < cameras.size(); ++i)
-            known += (i ? ", " : "") + std::to_string(i) + " '" + cameras[i].name + "'" +
-                     (cameras[i].node.empty() ? "" : " on node '" + cameras[i].node + "'");
-        throw Error(ErrorKind::Config, path + ": no camera '" + which + "' by name, node name or index (" +
-                                           (known.empty() ? "the file has none" : "cameras: " + known) + ")");
+int Scene::cameraIndex(const std::string& which) const {
+    if (which.empty()) return cameras.empty() ? -1 : 0;
+    // Exporters often leave cameras unnamed (Blender names the node, not the camera): the
+    // camera's name first, then its node's, then its index.
+    for (size_t i = 0; i < cameras.size(); ++i)
+        if (cameras[i].name == which) return int(i);
+    for (size_t i = 0; i < cameras.size(); ++i)
+        if (cameras[i].node == which) return int(i);
+    if (which.find_first_not_of("0123456789") == std::string::npos && which.size() < 10) {
+        const size_t index = std::stoul(which);
+        if (index < cameras.size()) return int(index);
     }
-    if (!cameras.empty()) return cameras.front();
+    std::string known;
+    for (size_t i = 0; i < cameras.size(); ++i)
+        known += (i ? ", " : "") + std::to_string(i) + " '" + cameras[i].name + "'" +
+                 (cameras[i].node.empty() ? "" : " on node '" + cameras[i].node + "'");
+    throw Error(ErrorKind::Config, path + ": no camera '" + which + "' by name, node name or index (" +
+                                       (known.empty() ? "the file has none" : "cameras: " + known) + ")");
+}
+
+Camera Scene::camera(const std::string& which) const {
+    const int index = cameraIndex(which);
+    if (index >= 0) return cameras[size_t(index)];
     // Frame the bounds: look along -Z from in front of the box, the whole box in view.
     Camera c;
     c.name = "framing";

@@ -192,6 +192,9 @@ struct Scene {
     // The camera to render: the one `which` names (its name, its node's name, or its index in
     // `cameras`, tried in that order), or the first, or one framing the bounds.
     Camera camera(const std::string& which = "") const;
+    // Its index in `cameras`: -1 for the framing camera (no `which` and no camera); throws where
+    // `which` names none.
+    int cameraIndex(const std::string& which = "") const;
     // Total flux emitted by area and punctual lights, W (directional lights count over the
     // scene's bounding-sphere disc); textured emitters by their texture's mean.
     Vec3 emittedPower() const;
