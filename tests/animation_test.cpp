@@ -194,6 +194,42 @@ TEST(Animation, WalkthroughCameraEqualsTheLoadersPosedCameraBitForBit) {
     EXPECT_EQ(again.cameras[0].position, rest.cameras[0].position);
 }
 
+TEST(Animation, SceneFilePosedIsTheLoadersPosedSceneBitForBit) {
+    // A walkthrough whose mesh moves reads the file once and flattens it at each frame's pose:
+    // each must be the scene loadScene flattens from the file at that pose, whatever was posed
+    // before, and the rest pose again the still's scene.
+    TempDir dir;
+    const std::string path = writeRigScene(dir, true);
+    const Scene rest = loadScene(path, silentReporter());
+    SceneFile file(path, silentReporter());
+    auto expectSame = [](const Scene& a, const Scene& b, const std::string& what) {
+        EXPECT_EQ(a.positions, b.positions) << what;
+        EXPECT_EQ(a.normals, b.normals) << what;
+        EXPECT_EQ(a.uvs, b.uvs) << what;
+        EXPECT_EQ(a.triMaterial, b.triMaterial) << what;
+        EXPECT_EQ(a.objectNames, b.objectNames) << what;
+        EXPECT_EQ(a.materials.size(), b.materials.size()) << what;
+        EXPECT_EQ(a.bounds.lo, b.bounds.lo) << what;
+        EXPECT_EQ(a.bounds.hi, b.bounds.hi) << what;
+        ASSERT_EQ(a.cameras.size(), b.cameras.size()) << what;
+        for (size_t i = 0; i < a.cameras.size(); ++i) {
+            EXPECT_EQ(a.cameras[i].position, b.cameras[i].position) << what;
+            EXPECT_EQ(a.cameras[i].forward, b.cameras[i].forward) << what;
+        }
+        EXPECT_EQ(a.animation.cameraNode, b.animation.cameraNode) << what;
+    };
+    expectSame(file.scene(), rest, "as read");
+    const SceneAnimation& a = rest.animation;
+    for (float t : {0.5f, 0.2f, 0.5f}) {
+        const std::vector<Mat4> pose = a.pose({0}, t);
+        const Scene loaded = loadScene(path, silentReporter(), 0, &pose);
+        expectSame(file.pose(pose), loaded, "t " + std::to_string(t));
+        EXPECT_NE(loaded.positions, rest.positions) << "the rig moved the triangle at t " << t;
+    }
+    const std::vector<Mat4> restPose = a.pose({}, 0.f);
+    expectSame(file.pose(restPose), rest, "back at rest");
+}
+
 // A small, quick walkthrough of the rig scene under a uniform sky.
 RenderConfig walkConfig(const std::string& scene, const TempDir& dir, int first, int last) {
     RenderConfig cfg;

@@ -46,16 +46,25 @@ Scene GltfLoader::load() {
 }
 
 void GltfLoader::warn(const std::string& kind, const std::string& message) {
-    if (repeated_[kind]++ == 0) reporter_.warn(path_ + ": " + message);
+    if (repeated_[kind]++ == 0) reporter_->warn(path_ + ": " + message);
 }
 
 void GltfLoader::reportRepeatedWarnings() {
     for (const auto& [kind, count] : repeated_)
-        if (count > 1) reporter_.warn(path_ + ": … and " + std::to_string(count - 1) + " more " + kind);
+        if (count > 1) reporter_->warn(path_ + ": … and " + std::to_string(count - 1) + " more " + kind);
     repeated_.clear();
 }
 
 Scene GltfLoader::loadAll() {
+    read();
+    flatten(pose_);
+    // These warnings only once the load succeeded: a failed load is one error line.
+    warnIgnoredFeatures();
+    if (!gltfWarning_.empty()) reporter_->warn(path_ + ": " + gltfWarning_);
+    return std::move(scene_);
+}
+
+void GltfLoader::read() {
     readFile();
     checkExtensions();
     scene_.path = path_;
@@ -63,7 +72,21 @@ Scene GltfLoader::loadAll() {
     decodeImages();
     loadLights();
     loadAnimations();
-    if (pose_ && pose_->size() != model_.nodes.size()) fail("the pose does not match the file's nodes", ErrorKind::Internal);
+}
+
+void GltfLoader::flatten(const std::vector<Mat4>* pose) {
+    if (pose && pose->size() != model_.nodes.size()) fail("the pose does not match the file's nodes", ErrorKind::Internal);
+    pose_ = pose;
+    // What the nodes place: a scene flattened before at another pose loses it.
+    Scene& s = scene_;
+    for (auto* v : {&s.positions, &s.normals, &s.portals}) v->clear();
+    for (auto* v : {&s.uvs, &s.uvs1}) v->clear();
+    for (auto* v : {&s.colors, &s.tangents}) v->clear();
+    for (auto* v : {&s.triMaterial, &s.triObject}) v->clear();
+    s.animation.cameraNode.clear();
+    s.objectNames.clear();
+    s.lights.clear();
+    s.cameras.clear();
 
     // Flatten the node hierarchy of the default scene into world space.
     if (model_.scenes.empty()) fail("the file has no scene");
@@ -76,10 +99,6 @@ Scene GltfLoader::loadAll() {
     if (scene_.triangleCount() == 0) fail("the scene has no triangles");
     scene_.computeBounds();
     reportRepeatedWarnings();
-    // These warnings only once the load succeeded: a failed load is one error line.
-    warnIgnoredFeatures();
-    if (!gltfWarning_.empty()) reporter_.warn(path_ + ": " + gltfWarning_);
-    return std::move(scene_);
 }
 
 void GltfLoader::readEnvironment(const tinygltf::Value& extras, const std::string& where) {
@@ -156,7 +175,7 @@ void GltfLoader::warnIgnoredFeatures() {
     for (const std::string& e : model_.extensionsUsed)
         if (!kSupportedExtensions.count(e) && !kIgnoredMaterialExtensions.count(e)) use("extension " + e, "the file's extensionsUsed");
     for (const auto& [feature, u] : uses)
-        reporter_.warn(path_ + ": ignored: " + feature + " in " + u.first +
+        reporter_->warn(path_ + ": ignored: " + feature + " in " + u.first +
                        (u.second > 1 ? " and " + std::to_string(u.second - 1) + " more" : ""));
 }
 

@@ -33,8 +33,18 @@ public:
     // (SceneAnimation::pose: every node's local transform), the nodes are flattened as posed
     // instead of as the file writes them.
     GltfLoader(const std::string& path, Reporter& reporter, int threads = 0, const std::vector<Mat4>* pose = nullptr)
-        : path_(path), reporter_(reporter), threads_(threads), pose_(pose) {}
+        : path_(path), reporter_(&reporter), threads_(threads), pose_(pose) {}
     Scene load();
+
+    // The two halves of load(), for a file flattened at many poses (SceneFile): read() parses the
+    // file, its materials, textures (decoded), lights and animations, once; flatten() places what
+    // the nodes carry — triangles, portals, punctual lights, cameras — at `pose` (nullptr: the
+    // file's transforms) into scene(), replacing what an earlier flatten placed.
+    void read();
+    void flatten(const std::vector<Mat4>* pose);
+    Scene& scene() { return scene_; }
+    // Warnings from here on go nowhere: a walkthrough's later poses say nothing the first did not.
+    void quiet() { reporter_ = &silentReporter(); }
 
 private:
     Scene loadAll();
@@ -112,7 +122,7 @@ private:
     static std::vector<uint32_t> triangulate(const std::vector<uint32_t>& idx, int mode);
 
     std::string path_;
-    Reporter& reporter_;
+    Reporter* reporter_;
     int threads_ = 0;
     const std::vector<Mat4>* pose_;
     tinygltf::Model model_;

@@ -58,7 +58,7 @@ void GltfLoader::loadMaterials() {
 
         if (transmission > 0.f) {
             if (transmission < 1.f)
-                reporter_.warn(path_ + ": " + where + ": transmission " + std::to_string(transmission) +
+                reporter_->warn(path_ + ": " + where + ": transmission " + std::to_string(transmission) +
                                " treated as " + (transmission >= 0.5f ? "1" : "0"));
         }
         if (transmission >= 0.5f) out.kind = MaterialKind::Glass;

@@ -24,6 +24,23 @@ Scene loadScene(const std::string& path, Reporter& reporter, int threads, const 
     return gltf::GltfLoader(path, reporter, threads, pose).load();
 }
 
+SceneFile::SceneFile(const std::string& path, Reporter& reporter, int threads)
+    : loader_(std::make_unique<gltf::GltfLoader>(path, reporter, threads)) {
+    // load()'s steps, its scene kept in the loader for the poses to come.
+    Scene rest = loader_->load();
+    loader_->scene() = std::move(rest);
+    loader_->quiet();
+}
+
+SceneFile::~SceneFile() = default;
+
+const Scene& SceneFile::scene() const { return loader_->scene(); }
+
+const Scene& SceneFile::pose(const std::vector<Mat4>& pose) {
+    loader_->flatten(&pose);
+    return loader_->scene();
+}
+
 // -- Scene queries ---------------------------------------------------------------------------
 
 Vec3 PunctualLight::intensityTowards(const Vec3& w) const {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -210,5 +211,27 @@ void computeMissingTangents(Scene& scene);
 // thread); with `pose` (SceneAnimation::pose), the nodes flattened as posed. Throws
 // Error(Scene/Io) naming the file and glTF object.
 Scene loadScene(const std::string& path, class Reporter& reporter, int threads = 0, const std::vector<Mat4>* pose = nullptr);
+
+namespace gltf {
+class GltfLoader;
+}
+
+// A glTF file read once and flattened at any number of poses: a walkthrough whose meshes or
+// lights move (lib/walkthrough.h) keeps the parsed file, its materials, decoded textures, lights
+// and animations across its frames, and places the nodes' triangles, lights and cameras anew
+// for each. scene() after pose(p) is loadScene(path, …, &p), to the bit.
+class SceneFile {
+public:
+    // Reads the file and flattens it as the file writes it; warnings go to `reporter`, once.
+    // Throws as loadScene does.
+    SceneFile(const std::string& path, class Reporter& reporter, int threads = 0);
+    ~SceneFile();
+    const Scene& scene() const;
+    // The scene flattened at `pose` (SceneAnimation::pose), replacing the one before; silent.
+    const Scene& pose(const std::vector<Mat4>& pose);
+
+private:
+    std::unique_ptr<gltf::GltfLoader> loader_;
+};
 
 }  // namespace rs
