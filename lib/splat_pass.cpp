@@ -255,6 +255,7 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonSto
     // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
     // photons that reach an eye sample (docs/design.md §8); stored photons have theirs already.
     splat_.coverage = measuresCoverage_ && !store ? &coverage_ : nullptr;
+    c.stats.setCount("photon_passes_traced", 0);  // by this render: none where a store had them all
 }
 
 // The eye samples of pass `pass` (the next S of each pixel's sequence) and its direct film.
@@ -289,6 +290,7 @@ PhotonMap SplatPasses::tracePhotonsOf(int pass, PhotonSettings& passSettings) {
     PhotonMap photons = tracePhotons(c_.scene, c_.accel, c_.lights, passSettings, c_.pool, c_.reporter);
     c_.stats.addTime("photons", t.seconds());
     photons.report(c_.stats);
+    c_.stats.setCount("photon_passes_traced", ++traced_);
     totals_.photonsStored += int64_t(photons.rays.size());
     totals_.photonMb = std::max(totals_.photonMb, double(photons.bytes()) / kMB);
     return photons;
@@ -314,7 +316,6 @@ PhotonMap SplatPasses::storedPhotonsOf(int pass, PhotonSettings& passSettings) {
         photons_.radiusScale = passRadiusScale(pass, c_.cfg.alpha);
         passSettings = photons_;
     }
-    c_.stats.setCount("photon_passes_traced", double(store_->traced));
     c_.stats.setCount("photon_store_mb", store_->bytes() / kMB);
     return it->second;
 }

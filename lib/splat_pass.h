@@ -84,6 +84,7 @@ private:
     SplatTotals totals_;
     const bool probing_, sparse_, measuresCoverage_;
     bool replaying_ = false;
+    int traced_ = 0;  // passes whose photons this render traced (stats: photon_passes_traced)
     double nextPass_ = 0.0;  // the probe's estimate of a later pass's seconds
     Timer whole_;
 };

@@ -1,6 +1,7 @@
 // A walkthrough's frames (walkthrough.h).
 #include "walkthrough.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -37,16 +38,38 @@ std::string seconds(float t) {
     return b;
 }
 
+// One rank of an MPI job rendering a whole frame by itself: a single process to the render,
+// but sharing its machine's memory with the job's other ranks there (the memory check).
+class AloneOnSharedMachine : public Ranks {
+public:
+    explicit AloneOnSharedMachine(int onThisMachine) : onThisMachine_(onThisMachine) {}
+    int sizeOnThisMachine() const override { return onThisMachine_; }
+
+private:
+    int onThisMachine_;
+};
+
 }  // namespace
 
 Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ranks)
-    : cfg_(cfg), reporter_(reporter), ranks_(ranks), rest_(loadScene(cfg.scene, reporter, cfg.threads)) {
+    : cfg_(cfg), posedCfg_(cfg), reporter_(reporter), ranks_(ranks) {
     cfg.validate();
-    const SceneAnimation& animation = rest_.animation;
+    Timer read;
+    file_ = std::make_unique<SceneFile>(cfg.scene, reporter, cfg.threads);
+    readSeconds_ = read.seconds();
+    const Scene& rest = file_->scene();
+    const SceneAnimation& animation = rest.animation;
     selected_ = animation.select(cfg.animation, cfg.scene);
     camerasOnly_ = animation.movesOnlyCameras(selected_);
     if (camerasOnly_ && cfg.splats()) store_ = std::make_unique<PhotonStore>();
-    cameraIndex_ = rest_.cameraIndex(cfg.camera);  // throws naming it when there is none
+    // Where meshes or lights move, each frame traces its own photons; their kernel scale is the
+    // one a stored range uses (1 unless given), not probed frame by frame from each view.
+    if (!camerasOnly_ && posedCfg_.kernelScale <= 0.f) posedCfg_.kernelScale = 1.f;
+    cameraIndex_ = rest.cameraIndex(cfg.camera);  // throws naming it when there is none
+    // Whole frames to ranks where there is one for each: the photons of a camera-only range
+    // are then traced once a rank, not once a frame's share.
+    wholeFrames_ = ranks.size() > 1 && cfg.lastFrame - cfg.firstFrame + 1 >= ranks.size();
+    if (wholeFrames_) alone_ = std::make_unique<AloneOnSharedMachine>(ranks.sizeOnThisMachine());
 
     // What the range shows that the user may not expect: warnings, once.
     if (!animation.unsupported.empty())
@@ -69,28 +92,33 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
 Walkthrough::~Walkthrough() = default;
 
 Camera Walkthrough::cameraAt(const std::vector<Mat4>& pose) const {
-    if (cameraIndex_ < 0) return rest_.camera(cfg_.camera);  // the framing camera does not move
-    const SceneAnimation& a = rest_.animation;
-    return placeCamera(rest_.cameras[cameraIndex_], a.worldFrom(a.cameraNode[cameraIndex_], pose));
+    const Scene& rest = file_->scene();
+    if (cameraIndex_ < 0) return rest.camera(cfg_.camera);  // the framing camera does not move
+    const SceneAnimation& a = rest.animation;
+    return placeCamera(rest.cameras[cameraIndex_], a.worldFrom(a.cameraNode[cameraIndex_], pose));
 }
 
 RenderResult Walkthrough::renderFrame(int frame) {
     const float t = float(frame) / cfg_.fps;
-    const std::vector<Mat4> pose = rest_.animation.pose(selected_, t);
+    const std::vector<Mat4> pose = file_->scene().animation.pose(selected_, t);
     RenderResult result;
     if (camerasOnly_) {
-        // The scene as loaded and the photons of the frames before: only the camera is posed.
-        if (!prepared_) prepared_ = std::make_unique<PreparedScene>(rest_, cfg_, reporter_, ranks_);
+        // The scene as read and the photons of the frames before: only the camera is posed.
+        if (!prepared_) prepared_ = std::make_unique<PreparedScene>(file_->scene(), cfg_, reporter_, frameRanks());
         result = prepared_->render(cameraAt(pose), store_.get());
     } else {
-        // Meshes or lights move: the frame's own scene, flattened as posed (its warnings were the
-        // rest scene's).
-        Timer load;
-        const Scene posed = loadScene(cfg_.scene, silentReporter(), cfg_.threads, &pose);
-        const double loadSeconds = load.seconds();
-        result = PreparedScene(posed, cfg_, reporter_, ranks_).render(posed.camera(cfg_.camera));
-        result.stats.seconds.insert(result.stats.seconds.begin(), {"load", loadSeconds});
+        // Meshes or lights move: the nodes flattened at the frame's pose from the file as read,
+        // and what depends on the geometry built for this frame alone.
+        Timer flatten;
+        const Scene& posed = file_->pose(pose);
+        const double poseSeconds = flatten.seconds();
+        result = PreparedScene(posed, posedCfg_, reporter_, frameRanks()).render(posed.camera(cfg_.camera));
+        result.stats.seconds.insert(result.stats.seconds.begin(), {"pose", poseSeconds});
     }
+    // The file is read once for the range: the first frame rendered counts it.
+    result.stats.setCount("scene_reads", firstFrame_ ? 1 : 0);
+    if (firstFrame_) result.stats.seconds.insert(result.stats.seconds.begin(), {"load", readSeconds_});
+    firstFrame_ = false;
     result.stats.setCount("frame", frame);
     result.attributes["frame"] = std::to_string(frame);
     result.attributes["time"] = std::to_string(t);
@@ -106,33 +134,60 @@ RenderConfig Walkthrough::frameConfig(int frame) const {
     return c;
 }
 
+Walkthrough::FrameDone Walkthrough::doFrame(int frame, int left, double secondsLeft) {
+    const RenderConfig fc = frameConfig(frame);
+    bool exists = cfg_.skipExisting;
+    std::error_code ec;
+    for (const std::string* f : {&fc.output, &fc.png, &fc.statsJson})
+        if (!f->empty()) exists = exists && std::filesystem::exists(*f, ec);
+    // A frame divided between ranks: rank 0 decides what exists, and every rank skips alike.
+    if (!wholeFrames_) exists = agreeOrStop(ranks_, exists);
+    if (exists) return {2, 0, 0, 0};
+    reporter_.frame(frame, left, secondsLeft);
+    RenderResult result = renderFrame(frame);
+    if (wholeFrames_ || ranks_.rank() == 0) writeOutputs(result, fc);
+    return {1, result.film.width, result.film.height, int64_t(result.stats.totalSeconds() * 1e6)};
+}
+
+// Rank 0 says what became of each frame of the round, in frame order.
+void Walkthrough::reportRound(int firstOfRound, const std::vector<int64_t>& done) {
+    for (size_t r = 0; 4 * r < done.size(); ++r) {
+        const int frame = firstOfRound + int(r);
+        const int64_t* d = &done[4 * r];
+        if (d[0] == 2) reporter_.info("frame " + std::to_string(frame) + ": " + frameConfig(frame).output + " exists, skipped");
+        if (d[0] != 1) continue;
+        char line[96];
+        const std::string rank = wholeFrames_ ? ", rank " + std::to_string(r) : "";
+        std::snprintf(line, sizeof line, " (frame %d%s, %lldx%lld, %.2f s)", frame, rank.c_str(), (long long)d[1],
+                      (long long)d[2], double(d[3]) * 1e-6);
+        reporter_.info("wrote " + frameConfig(frame).output + line);
+    }
+}
+
 int Walkthrough::run() {
-    const bool root = ranks_.rank() == 0;
-    int rendered = 0;
+    const int shares = wholeFrames_ ? ranks_.size() : 1, me = wholeFrames_ ? ranks_.rank() : 0;
+    const int rounds = (cfg_.lastFrame - cfg_.firstFrame + shares) / shares;
+    int rendered = 0, roundsRendered = 0;
     Timer clock;
-    for (int frame = cfg_.firstFrame; frame <= cfg_.lastFrame; ++frame) {
+    // Every rank read the file: no frame is written where one could not.
+    if (wholeFrames_) agreeOrStop(ranks_, false);
+    for (int round = 0; round < rounds; ++round) {
         throwIfStopped();
-        const RenderConfig fc = frameConfig(frame);
-        // Rank 0 decides what exists; every rank skips alike.
-        bool exists = cfg_.skipExisting;
-        std::error_code ec;
-        for (const std::string* f : {&fc.output, &fc.png, &fc.statsJson})
-            if (!f->empty()) exists = exists && std::filesystem::exists(*f, ec);
-        if (agreeOrStop(ranks_, exists)) {
-            reporter_.info("frame " + std::to_string(frame) + ": " + fc.output + " exists, skipped");
-            continue;
-        }
-        const int left = cfg_.lastFrame - frame;
-        reporter_.frame(frame, left, rendered > 0 ? clock.seconds() / rendered * (left + 1) : -1.0);
-        RenderResult result = renderFrame(frame);
-        if (root) writeOutputs(result, fc);
-        // Rank 0 wrote the frame: the others learn here whether that failed.
+        const int firstOfRound = cfg_.firstFrame + round * shares, frame = firstOfRound + me;
+        const double secondsLeft = roundsRendered > 0 ? clock.seconds() / roundsRendered * (rounds - round) : -1.0;
+        const FrameDone done = frame <= cfg_.lastFrame ? doFrame(frame, cfg_.lastFrame - frame, secondsLeft) : FrameDone{};
+        // Every frame of the round is written (by its rank, or by rank 0 where the ranks shared
+        // it): the others learn here whether that failed, before the round's report.
         agreeOrStop(ranks_, false);
-        ++rendered;
-        char line[64];
-        std::snprintf(line, sizeof line, " (frame %d, %dx%d, %.2f s)", frame, result.film.width, result.film.height,
-                      result.stats.totalSeconds());
-        if (root) reporter_.info("wrote " + fc.output + line);
+        std::vector<int64_t> all(4 * size_t(shares), 0);
+        const int64_t mine[4] = {done.status, done.width, done.height, done.microseconds};
+        std::copy(mine, mine + 4, all.begin() + 4 * me);
+        if (wholeFrames_) ranks_.sumAtRoot(all);
+        reportRound(firstOfRound, all);
+        int renderedNow = 0;
+        for (size_t r = 0; r < size_t(shares); ++r) renderedNow += all[4 * r] == 1;
+        rendered += renderedNow;
+        roundsRendered += renderedNow > 0;
     }
     return rendered;
 }

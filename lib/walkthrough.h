@@ -2,12 +2,18 @@
 // of the file's animations, frame n posed at time n / fps (scene/animation.h), each rendered as
 // a still of its pose and written to its own outputs as soon as it is done.
 //
-// What is kept across the range: with only cameras moving, the scene as loaded, everything
-// render.cpp's PreparedScene builds from it (threads, BVH, lights) and, for the splat methods,
-// every pass's photons (PhotonStore, docs/design.md §12), each frame changing only the camera;
-// otherwise each frame loads and flattens its own pose. Each frame's passes use the render's
-// seed, not the frame's place in the range, and a frame rendered alone has a store of its own:
-// frame f is the same image alone or in any range.
+// What is kept across the range: the file as read (SceneFile: parsed, materials, decoded
+// textures, lights, animations). With only cameras moving, also the scene as flattened,
+// everything render.cpp's PreparedScene builds from it (threads, BVH, lights) and, for the
+// splat methods, every pass's photons (PhotonStore, docs/design.md §12), each frame changing
+// only the camera. Where a mesh or light moves, each frame flattens the nodes at its pose and
+// builds what depends on the geometry (BVH, lights, grid, photons) for itself. Each frame's
+// passes use the render's seed, not the frame's place in the range, and a frame rendered alone
+// has a store of its own: frame f is the same image alone or in any range.
+//
+// Under MPI (lib/ranks.h) a range of at least as many frames as ranks is dealt out whole: in
+// round k rank r renders frame firstFrame + k·R + r by itself and writes it, and rank 0 reports
+// the round. Fewer frames than ranks: every frame is divided between the ranks as a still is.
 #pragma once
 
 #include <memory>
@@ -30,28 +36,43 @@ std::string framePath(const std::string& pattern, int frame, bool several);
 
 class Walkthrough {
 public:
-    // Loads cfg.scene and chooses its animations (cfg.animation); warns where frames fall outside
+    // Reads cfg.scene and chooses its animations (cfg.animation); warns where frames fall outside
     // them and about skins and morph targets. Throws Error naming the file.
     Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ranks);
     ~Walkthrough();
 
-    // Renders the range in order, writing each frame's outputs when it is done (rank 0); frames
-    // whose outputs all exist are skipped with cfg.skipExisting. Returns the frames rendered.
+    // Renders the range in order (by rounds of whole frames under MPI), writing each frame's
+    // outputs when it is done; frames whose outputs all exist are skipped with cfg.skipExisting.
+    // Returns the frames the job rendered (at rank 0).
     int run();
     // Frame `frame` rendered, not written.
     RenderResult renderFrame(int frame);
     // cfg with frame `frame`'s output files.
     RenderConfig frameConfig(int frame) const;
     bool movesOnlyCameras() const { return camerasOnly_; }
-    const Scene& restScene() const { return rest_; }
+    bool dealsWholeFrames() const { return wholeFrames_; }
+    // The file's scene: its animations, and the geometry of the pose flattened last.
+    const Scene& scene() const { return file_->scene(); }
 
 private:
+    // What became of one frame of a round: 0 not this rank's, 1 rendered, 2 skipped.
+    struct FrameDone {
+        int64_t status = 0, width = 0, height = 0, microseconds = 0;
+    };
+    FrameDone doFrame(int frame, int left, double secondsLeft);
+    void reportRound(int firstOfRound, const std::vector<int64_t>& done);
     Camera cameraAt(const std::vector<Mat4>& pose) const;
+    Ranks& frameRanks() { return alone_ ? *alone_ : ranks_; }
 
     const RenderConfig& cfg_;
+    RenderConfig posedCfg_;  // cfg_ for the frames where meshes or lights move
     Reporter& reporter_;
     Ranks& ranks_;
-    Scene rest_;  // as the file writes it: its animations, and the geometry of a cameras-only range
+    std::unique_ptr<Ranks> alone_;  // this rank rendering a whole frame by itself; null: ranks_ split each frame
+    bool wholeFrames_ = false;
+    std::unique_ptr<SceneFile> file_;
+    double readSeconds_ = 0.0;  // reading the file, counted in the first frame's stats
+    bool firstFrame_ = true;
     std::vector<int> selected_;  // the animations that play
     bool camerasOnly_ = true;
     int cameraIndex_ = -1;  // the rendered camera in Scene::cameras; -1: the framing camera

@@ -4,8 +4,9 @@
 Runs the real binary ($RAYSPLAT) under `mpirun --oversubscribe` against the same command
 without mpirun, and compares the EXRs' pixel data byte for byte (docs/design.md §11): splat with
 passes going round the ranks and with one pass shared between them, the path tracer both ways,
-and a --time-limit render, whose ranks must agree on one pass count. A failing rank must end
-every rank with one error line and no output. Skips (77) without mpirun or without MPI in the
+and a --time-limit render, whose ranks must agree on one pass count; a walkthrough's frames
+dealt whole to ranks, each the frame one process renders. A failing rank must end every rank
+with one error line and no output. Skips (77) without mpirun or without MPI in the
 build.
 
   mpi_test.py --mpi true|false   (whether raysplat was built with Open MPI)
@@ -114,6 +115,62 @@ def test_ctrl_c_stops_every_rank_cleanly():
     cli.check(leftover == [], "files left behind: %r" % leftover)
 
 
+def walk(out, name, ranks, *args):
+    """--frames 1-3 of the walkthrough (2 passes a frame) to out/name_####.exr with stats, by
+    `ranks` MPI ranks or one plain process for 0: {frame: (pixels, counts)}, and stderr."""
+    command = ["render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o", os.path.join(out, name + "_####.exr"),
+               "--stats-json", os.path.join(out, name + "_####.json"), "--frames", "1-3", "--width", "32",
+               "--passes", "2", "--photons", "8000", "--spp", "1", "--direct-spp", "2", "--grid", "48", *args]
+    r = mpirun(ranks, RAYSPLAT, *command) if ranks else cli.run(*command, timeout=300)
+    cli.check(r.returncode == 0, "%s with %d ranks failed (%d): %s" % (name, ranks, r.returncode, r.stderr))
+    frames = {}
+    for f in (1, 2, 3):
+        if not os.path.exists(os.path.join(out, "%s_%04d.exr" % (name, f))):
+            continue
+        with open(os.path.join(out, "%s_%04d.exr" % (name, f)), "rb") as exr, \
+                open(os.path.join(out, "%s_%04d.json" % (name, f))) as stats:
+            frames[f] = (cli.exr_pixel_chunks(exr.read()), json.load(stats)["counts"])
+    return frames, r.stderr
+
+
+def test_whole_frames_go_to_ranks():
+    """mpirun -n 2 … --frames 1-3: rank 0 renders frames 1 and 3, rank 1 frame 2, each by itself
+    (its own photons, traced once a rank for the range); every frame's pixels are those one
+    process renders (with another thread count). Rank 0 reports every frame once. With frame 2
+    removed, --skip-existing renders it alone, the same again."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        one, _ = walk(out, "one", 0, "--threads", "2")
+        many, err = walk(out, "many", 2, "--threads", "1")
+        cli.check(sorted(many) == [1, 2, 3], "frames written: %r" % sorted(many))
+        for f in (1, 2, 3):
+            cli.check(many[f][0] == one[f][0], "frame %d of 2 ranks differs from one process's" % f)
+            cli.check(many[f][1]["ranks"] == 1, "frame %d was divided between %r ranks" % (f, many[f][1]["ranks"]))
+        traced = {f: many[f][1]["photon_passes_traced"] for f in (1, 2, 3)}
+        cli.check(traced == {1: 2, 2: 2, 3: 0}, "passes traced a frame (rank 0: 1 and 3, rank 1: 2): %r" % traced)
+        wrote = [line for line in err.splitlines() if "wrote" in line]
+        cli.check(len(wrote) == 3 and ", rank 1," in wrote[1] and ", rank 0," in wrote[2], "the frames' lines: %r" % wrote)
+        os.remove(os.path.join(out, "many_0002.exr"))
+        again, err = walk(out, "many", 2, "--threads", "1", "--skip-existing")
+        cli.check(again[2][0] == one[2][0], "frame 2 rendered again differs")
+        skipped = [line for line in err.splitlines() if "skipped" in line]
+        cli.check(len(skipped) == 2, "expected frames 1 and 3 skipped once each: %r" % skipped)
+
+
+def test_a_failing_rank_stops_the_frames():
+    """Rank 1 cannot read its scene: one error line and no frame written by either rank."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        pattern = os.path.join(out, "w_####.exr")
+        good = ["render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o", pattern, "--frames", "1-4", *SMALL]
+        bad = ["render", os.path.join(out, "missing.gltf"), "-o", pattern, "--frames", "1-4", *SMALL]
+        r = mpirun(1, RAYSPLAT, *good, ":", "-np", "1", RAYSPLAT, *bad)
+        leftover = os.listdir(out)
+    errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
+    cli.check(r.returncode != 0, "mpirun exited 0")
+    cli.check(errors == ["raysplat: error: %s: no such file" % os.path.join(out, "missing.gltf")],
+              "expected one error line naming the file, got %r" % errors)
+    cli.check(leftover == [], "files left behind: %r" % leftover)
+
+
 def test_bad_settings_are_said_once():
     r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "-1")
     errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
@@ -132,6 +189,8 @@ def main():
         ("path: 1 pass's rows shared by 3 ranks", same_image(3, cli.GLOSSY, "--method", "path")),
         ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),
         ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
+        ("walkthrough: whole frames go to ranks, each the one process's", test_whole_frames_go_to_ranks),
+        ("walkthrough: a failing rank stops the frames", test_a_failing_rank_stops_the_frames),
         ("bad settings are said once", test_bad_settings_are_said_once),
         ("Ctrl-C stops every rank cleanly", test_ctrl_c_stops_every_rank_cleanly),
     ]
