@@ -1,9 +1,12 @@
 // animation_test: glTF animations evaluated against hand-computed values for each interpolation,
 // parent chains posed through the loader and through the walkthrough's camera alike, frame
-// numbering in output names, and a frame rendered alone and within a range giving the same image.
+// numbering in output names, a frame rendered alone and within a range giving the same image, a
+// file flattened again at each pose, and a swinging door's shadow moving where geometry says.
+#include <array>
 #include <fstream>
 
 #include "scene/animation.h"
+#include "scene/camera.h"
 #include "test_scenes.h"
 #include "walkthrough.h"
 
@@ -283,6 +286,155 @@ TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
         }
         EXPECT_FALSE(sameFilm(frames[0], frames[1]));
         EXPECT_GT(test::layerMean(frames[0], kDirect) + test::layerMean(frames[0], kEmission), 0.0);
+    }
+}
+
+// -- A door's shadow ----------------------------------------------------------------------------
+
+// A floor (6 m square at y = 0, grey), a point light 3 m above its centre, a black door (1 m wide,
+// from 0.2 to 2 m high) hinged at (0.5, 0, 0.6) that swings kDoorOpen about +Y from frame 0 to
+// frame 1 (LINEAR), and an orthographic camera 5 m up looking straight down (5 m square view).
+constexpr float kDoorOpen = 70.f * kPi / 180.f;
+const Vec3 kHinge(0.5f, 0.f, 0.6f), kLamp(0.f, 3.f, 0.f);
+const Vec3 kDoor[4] = {{0.f, 0.2f, 0.f}, {1.f, 0.2f, 0.f}, {1.f, 2.f, 0.f}, {0.f, 2.f, 0.f}};  // about the hinge
+
+std::string writeDoorScene(const TempDir& dir) {
+    std::string bin;
+    std::vector<std::string> views, accessors;
+    auto add = [&](const std::string& bytes, int count, const char* type) {
+        views.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
+        bin += bytes;
+        accessors.push_back("{\"bufferView\":" + std::to_string(views.size() - 1) + ",\"componentType\":5126,\"count\":" +
+                            std::to_string(count) + ",\"type\":\"" + type + "\"}");
+        return std::to_string(accessors.size() - 1);
+    };
+    const std::string floor = add(floats({-3, 0, -3, -3, 0, 3, 3, 0, 3, -3, 0, -3, 3, 0, 3, 3, 0, -3}), 6, "VEC3");
+    std::vector<float> door;
+    for (int k : {0, 1, 2, 0, 2, 3}) door.insert(door.end(), {kDoor[k].x, kDoor[k].y, kDoor[k].z});
+    const std::string doorMesh = add(floats(door), 6, "VEC3");
+    const std::string times = add(floats({0.f, 1.f / 24.f}), 2, "SCALAR");
+    const std::string turns = add(floats({0, 0, 0, 1, 0, std::sin(0.5f * kDoorOpen), 0, std::cos(0.5f * kDoorOpen)}), 2, "VEC4");
+    const float h = std::sqrt(0.5f);
+    auto lambert = [](const char* albedo) {
+        return std::string("{\"pbrMetallicRoughness\":{\"baseColorFactor\":[") + albedo + "," + albedo + "," + albedo +
+               ",1],\"metallicFactor\":0,\"roughnessFactor\":1},\"doubleSided\":true}";
+    };
+    std::string doc =
+        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_lights_punctual\"],"
+        "\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"point\",\"intensity\":20}]}},"
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0,1,2,3]}],\"nodes\":["
+        "{\"name\":\"floor\",\"mesh\":0},"
+        "{\"name\":\"door\",\"mesh\":1,\"translation\":[0.5,0,0.6]},"
+        "{\"name\":\"lamp\",\"translation\":[0,3,0],\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}},"
+        "{\"name\":\"top\",\"camera\":0,\"translation\":[0,5,0.5],\"rotation\":[" + std::to_string(-h) + ",0,0," + std::to_string(h) + "]}],"
+        "\"cameras\":[{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2.5,\"ymag\":2.5,\"znear\":0.1,\"zfar\":10}}],"
+        "\"materials\":[" + lambert("0.5") + "," + lambert("0") + "],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":" + floor + "},\"material\":0}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":" + doorMesh + "},\"material\":1}]}],"
+        "\"animations\":[{\"name\":\"swing\",\"samplers\":[{\"input\":" + times + ",\"output\":" + turns + "}],"
+        "\"channels\":[{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"rotation\"}}]}],"
+        "\"accessors\":[" + join(accessors) + "],\"bufferViews\":[" + join(views) + "],"
+        "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"door.bin\"}]}";
+    std::ofstream(dir.file("door.bin"), std::ios::binary) << bin;
+    std::ofstream(dir.file("door.gltf"), std::ios::binary) << doc;
+    return dir.file("door.gltf");
+}
+
+// The door's corners in the world at swing `angle`, computed here, not by the loader.
+std::array<Vec3, 4> doorAt(float angle) {
+    std::array<Vec3, 4> c;
+    for (int k = 0; k < 4; ++k)
+        c[k] = kHinge + Vec3(kDoor[k].x * std::cos(angle) + kDoor[k].z * std::sin(angle), kDoor[k].y,
+                             -kDoor[k].x * std::sin(angle) + kDoor[k].z * std::cos(angle));
+    return c;
+}
+
+// Whether the segment from the lamp to `p` crosses triangle (a, b, c) (Möller–Trumbore).
+bool crosses(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 d = p - kLamp, e1 = b - a, e2 = c - a, q = glm::cross(d, e2);
+    const float det = glm::dot(e1, q);
+    if (std::abs(det) < 1e-9f) return false;
+    const Vec3 s = kLamp - a;
+    const float u = glm::dot(s, q) / det;
+    const Vec3 r = glm::cross(s, e1);
+    const float v = glm::dot(d, r) / det, t = glm::dot(e2, r) / det;
+    return u >= 0.f && v >= 0.f && u + v <= 1.f && t > 0.f && t < 1.f;
+}
+
+bool inShadow(const Vec3& p, const std::array<Vec3, 4>& door) {
+    return crosses(p, door[0], door[1], door[2]) || crosses(p, door[0], door[2], door[3]);
+}
+
+TEST(Walkthrough, ADoorsShadowMovesWithTheDoorAndNothingElseChanges) {
+    // Frames 0 (closed) and 1 (swung 70 degrees), by the path tracer and by photon splatting (its
+    // photons traced again for frame 1). Each pixel's floor point is classed by segments to the
+    // lamp past the door's corners as computed here: a pixel whose 5×5 points, spread a pixel and
+    // a half around its centre, are all lit in one frame and all in the door's shadow in the other
+    // is where the shadow moved, and must be dark (under 2 %) in that one. The door is black and a
+    // plane does not light itself: the image is the lamp's light alone, so a pixel lit in both
+    // frames more than 0.6 m from where either door stands has no reason to change at all, and
+    // must agree within the pixel sampling's noise (1 % a pixel, 0.2 % on average).
+    for (Method method : {Method::Path, Method::Splat}) {
+        TempDir dir;
+        RenderConfig cfg;
+        cfg.scene = writeDoorScene(dir);
+        cfg.output = dir.file("door.exr");
+        cfg.method = method;
+        cfg.width = 64;
+        cfg.spp = method == Method::Path ? 64 : 4;
+        cfg.passes = 1;
+        cfg.photons = 20000;
+        cfg.grid = 48;
+        cfg.voxelizer = "cpu";
+        cfg.firstFrame = 0;
+        cfg.lastFrame = 1;
+        Walkthrough walk(cfg, silentReporter(), singleProcess());
+        ASSERT_FALSE(walk.movesOnlyCameras());
+        const Film closed = walk.renderFrame(0).film, open = walk.renderFrame(1).film;
+        ASSERT_EQ(closed.width, 64);
+        ASSERT_EQ(closed.height, 64);
+        const std::array<Vec3, 4> doors[2] = {doorAt(0.f), doorAt(kDoorOpen)};
+        const CameraRays rays(walk.scene().camera(), closed.width, closed.height);
+        auto floorAt = [&](Vec2 raster) {
+            const Vec3 o = rays.origin(raster), d = rays.direction(raster);
+            return o - d * (o.y / d.y);
+        };
+        auto nearDoor = [&](const Vec3& p) {  // within 0.6 m of the floor under either door
+            for (const auto& door : doors)
+                for (float s = 0.f; s <= 1.f; s += 0.05f) {
+                    const Vec3 q = door[0] + s * (door[1] - door[0]);
+                    if (glm::length(Vec2(p.x - q.x, p.z - q.z)) < 0.6f) return true;
+                }
+            return false;
+        };
+        const char* name = method == Method::Path ? "path" : "splat";
+        int moved = 0, far = 0;
+        double farDifference = 0.0;
+        for (int y = 0; y < closed.height; ++y)
+            for (int x = 0; x < closed.width; ++x) {
+                int shadowed[2] = {0, 0};
+                for (int i = -2; i <= 2; ++i)
+                    for (int j = -2; j <= 2; ++j) {
+                        const Vec3 p = floorAt(Vec2(x + 0.5f + 0.75f * i, y + 0.5f + 0.75f * j));
+                        for (int f = 0; f < 2; ++f) shadowed[f] += inShadow(p, doors[f]);
+                    }
+                const size_t px = size_t(y) * closed.width + x;
+                const float a = luminance(closed.beauty(px)), b = luminance(open.beauty(px));
+                const bool lit[2] = {shadowed[0] == 0, shadowed[1] == 0}, dark[2] = {shadowed[0] == 25, shadowed[1] == 25};
+                if ((lit[0] && dark[1]) || (dark[0] && lit[1])) {
+                    ++moved;
+                    EXPECT_LT(lit[0] ? b : a, 0.02f * (lit[0] ? a : b))
+                        << name << ": pixel (" << x << ", " << y << ") did not " << (lit[0] ? "gain" : "lose") << " the shadow";
+                } else if (lit[0] && lit[1] && !nearDoor(floorAt(Vec2(x + 0.5f, y + 0.5f)))) {
+                    ++far;
+                    const float d = std::abs(a - b) / std::max(a, b);
+                    farDifference += d;
+                    EXPECT_LT(d, 0.01f) << name << ": pixel (" << x << ", " << y << ") far from the door changed";
+                }
+            }
+        EXPECT_GT(moved, 100) << name << ": the shadow hardly moved: the scene is not what the test means";
+        EXPECT_GT(far, 1500) << name;
+        EXPECT_LT(farDifference / std::max(far, 1), 0.002) << name << ": far pixels differ on average";
     }
 }
 
