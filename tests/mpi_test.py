@@ -171,6 +171,37 @@ def test_a_failing_rank_stops_the_frames():
     cli.check(leftover == [], "files left behind: %r" % leftover)
 
 
+def test_ctrl_c_leaves_whole_frames():
+    """SIGINT to mpirun once the first round of frames is written: every rank stops, one line,
+    and the files left are whole frames of that range (no staged files)."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        command = mpirun_command(2) + [RAYSPLAT, "render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o",
+                                       os.path.join(out, "w_####.exr"), "--frames", "0-40", "--width", "32",
+                                       "--passes", "4", "--photons", "8000", "--threads", "1"]
+        p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
+        seen = ""
+        while seen.count("wrote") < 2:
+            line = p.stderr.readline()
+            cli.check(line != "", "mpirun ended before two frames were written: %s" % seen)
+            seen += line
+        p.send_signal(signal.SIGINT)
+        try:
+            _, err = p.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise cli.Failure("the ranks did not stop within 30 s of SIGINT")
+        left = sorted(os.listdir(out))
+        for name in left:
+            cli.check(len(name) == len("w_0000.exr") and name.startswith("w_") and name.endswith(".exr"),
+                      "a file that is not a frame: %r" % name)
+            with open(os.path.join(out, name), "rb") as f:
+                cli.check(len(cli.exr_pixel_chunks(f.read())) > 0, "%s is not a whole EXR" % name)
+    stopped = [line for line in err.splitlines() if line.startswith("raysplat:") and "stopped" in line]
+    cli.check(p.returncode != 0, "mpirun exited 0 after SIGINT")
+    cli.check(len(stopped) == 1, "expected one 'stopped' line, got %r" % stopped)
+    cli.check("w_0000.exr" in left and "w_0001.exr" in left and len(left) < 41, "frames left: %r" % left)
+
+
 def test_bad_settings_are_said_once():
     r = mpirun(2, RAYSPLAT, "render", cli.CORNELL, "-o", "x.exr", "--spp", "-1")
     errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
@@ -191,6 +222,7 @@ def main():
         ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
         ("walkthrough: whole frames go to ranks, each the one process's", test_whole_frames_go_to_ranks),
         ("walkthrough: a failing rank stops the frames", test_a_failing_rank_stops_the_frames),
+        ("walkthrough: Ctrl-C leaves whole frames", test_ctrl_c_leaves_whole_frames),
         ("bad settings are said once", test_bad_settings_are_said_once),
         ("Ctrl-C stops every rank cleanly", test_ctrl_c_stops_every_rank_cleanly),
     ]
