@@ -115,22 +115,22 @@ def test_ctrl_c_stops_every_rank_cleanly():
     cli.check(leftover == [], "files left behind: %r" % leftover)
 
 
-def walk(out, name, ranks, *args):
-    """--frames 1-3 of the walkthrough (2 passes a frame) to out/name_####.exr with stats, by
-    `ranks` MPI ranks or one plain process for 0: {frame: (pixels, counts)}, and stderr."""
+def walk(out, name, ranks, *args, frames=(1, 3)):
+    """--frames 1-3 (`frames`) of the walkthrough (2 passes a frame) to out/name_####.exr with
+    stats, by `ranks` MPI ranks or one plain process for 0: {frame: (pixels, counts)}, and stderr."""
     command = ["render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o", os.path.join(out, name + "_####.exr"),
-               "--stats-json", os.path.join(out, name + "_####.json"), "--frames", "1-3", "--width", "32",
+               "--stats-json", os.path.join(out, name + "_####.json"), "--frames", "%d-%d" % frames, "--width", "32",
                "--passes", "2", "--photons", "8000", "--spp", "1", "--direct-spp", "2", "--grid", "48", *args]
     r = mpirun(ranks, RAYSPLAT, *command) if ranks else cli.run(*command, timeout=300)
     cli.check(r.returncode == 0, "%s with %d ranks failed (%d): %s" % (name, ranks, r.returncode, r.stderr))
-    frames = {}
-    for f in (1, 2, 3):
+    written = {}
+    for f in range(frames[0], frames[1] + 1):
         if not os.path.exists(os.path.join(out, "%s_%04d.exr" % (name, f))):
             continue
         with open(os.path.join(out, "%s_%04d.exr" % (name, f)), "rb") as exr, \
                 open(os.path.join(out, "%s_%04d.json" % (name, f))) as stats:
-            frames[f] = (cli.exr_pixel_chunks(exr.read()), json.load(stats)["counts"])
-    return frames, r.stderr
+            written[f] = (cli.exr_pixel_chunks(exr.read()), json.load(stats)["counts"])
+    return written, r.stderr
 
 
 def test_whole_frames_go_to_ranks():
@@ -154,6 +154,18 @@ def test_whole_frames_go_to_ranks():
         cli.check(again[2][0] == one[2][0], "frame 2 rendered again differs")
         skipped = [line for line in err.splitlines() if "skipped" in line]
         cli.check(len(skipped) == 2, "expected frames 1 and 3 skipped once each: %r" % skipped)
+
+
+def test_fewer_frames_than_ranks_are_divided():
+    """mpirun -n 3 … --frames 1-2: each frame divided between the 3 ranks as a still is, its
+    pixels one process's."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        one, _ = walk(out, "one", 0, frames=(1, 2))
+        many, _ = walk(out, "many", 3, "--threads", "1", frames=(1, 2))
+    cli.check(sorted(many) == [1, 2], "frames written: %r" % sorted(many))
+    for f in (1, 2):
+        cli.check(many[f][0] == one[f][0], "frame %d of 3 ranks differs from one process's" % f)
+        cli.check(many[f][1]["ranks"] == 3, "frame %d was rendered by %r ranks" % (f, many[f][1]["ranks"]))
 
 
 def test_a_failing_rank_stops_the_frames():
@@ -221,6 +233,7 @@ def main():
         ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),
         ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
         ("walkthrough: whole frames go to ranks, each the one process's", test_whole_frames_go_to_ranks),
+        ("walkthrough: fewer frames than ranks are divided", test_fewer_frames_than_ranks_are_divided),
         ("walkthrough: a failing rank stops the frames", test_a_failing_rank_stops_the_frames),
         ("walkthrough: Ctrl-C leaves whole frames", test_ctrl_c_leaves_whole_frames),
         ("bad settings are said once", test_bad_settings_are_said_once),
