@@ -142,11 +142,11 @@ Walkthrough::FrameDone Walkthrough::doFrame(int frame, int left, double secondsL
         if (!f->empty()) exists = exists && std::filesystem::exists(*f, ec);
     // A frame divided between ranks: rank 0 decides what exists, and every rank skips alike.
     if (!wholeFrames_) exists = agreeOrStop(ranks_, exists);
-    if (exists) return {2, 0, 0, 0};
+    if (exists) return {FrameDone::kSkipped, 0, 0, 0};
     reporter_.frame(frame, left, secondsLeft);
     RenderResult result = renderFrame(frame);
     if (wholeFrames_ || ranks_.rank() == 0) writeOutputs(result, fc);
-    return {1, result.film.width, result.film.height, int64_t(result.stats.totalSeconds() * 1e6)};
+    return {FrameDone::kRendered, result.film.width, result.film.height, int64_t(result.stats.totalSeconds() * 1e6)};
 }
 
 // Rank 0 says what became of each frame of the round, in frame order.
@@ -154,8 +154,8 @@ void Walkthrough::reportRound(int firstOfRound, const std::vector<int64_t>& done
     for (size_t r = 0; 4 * r < done.size(); ++r) {
         const int frame = firstOfRound + int(r);
         const int64_t* d = &done[4 * r];
-        if (d[0] == 2) reporter_.info("frame " + std::to_string(frame) + ": " + frameConfig(frame).output + " exists, skipped");
-        if (d[0] != 1) continue;
+        if (d[0] == FrameDone::kSkipped) reporter_.info("frame " + std::to_string(frame) + ": " + frameConfig(frame).output + " exists, skipped");
+        if (d[0] != FrameDone::kRendered) continue;
         char line[96];
         const std::string rank = wholeFrames_ ? ", rank " + std::to_string(r) : "";
         std::snprintf(line, sizeof line, " (frame %d%s, %lldx%lld, %.2f s)", frame, rank.c_str(), (long long)d[1],
@@ -185,7 +185,7 @@ int Walkthrough::run() {
         if (wholeFrames_) ranks_.sumAtRoot(all);
         reportRound(firstOfRound, all);
         int renderedNow = 0;
-        for (size_t r = 0; r < size_t(shares); ++r) renderedNow += all[4 * r] == 1;
+        for (size_t r = 0; r < size_t(shares); ++r) renderedNow += all[4 * r] == FrameDone::kRendered;
         rendered += renderedNow;
         roundsRendered += renderedNow > 0;
     }

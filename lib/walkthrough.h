@@ -55,9 +55,10 @@ public:
     const Scene& scene() const { return file_->scene(); }
 
 private:
-    // What became of one frame of a round: 0 not this rank's, 1 rendered, 2 skipped.
+    // What became of one frame of a round (four integers, summed at rank 0 by the round).
     struct FrameDone {
-        int64_t status = 0, width = 0, height = 0, microseconds = 0;
+        enum Status : int64_t { kNone = 0, kRendered = 1, kSkipped = 2 };  // kNone: no frame for this rank
+        int64_t status = kNone, width = 0, height = 0, microseconds = 0;
     };
     FrameDone doFrame(int frame, int left, double secondsLeft);
     void reportRound(int firstOfRound, const std::vector<int64_t>& done);
