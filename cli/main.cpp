@@ -25,6 +25,7 @@
 #include "memory.h"
 #include "mpi_ranks.h"
 #include "options.h"
+#include "poses.h"
 #include "reporters.h"
 #include "render.h"
 #include "walkthrough.h"
@@ -93,7 +94,7 @@ int cmdRender(int argc, char** argv, Ranks& ranks) {
     if (cfg.walkthrough()) {
         Timer run;
         const int rendered = Walkthrough(cfg, reporter, ranks).run();
-        reporter.info(fmt("%d of %d frames rendered, %.2f s", rendered, cfg.lastFrame - cfg.firstFrame + 1, run.seconds()));
+        reporter.info(fmt("%d of %d frames rendered, %.2f s", rendered, cfg.frameCount(), run.seconds()));
         if (root) cli::reportDone(args.json, cfg.output, run.seconds());
         return 0;
     }
@@ -138,15 +139,29 @@ int cmdInfo(int argc, char** argv) {
     bool gpu = false;
     Command cmd("raysplat info SCENE", "Loads SCENE and prints what the renderer sees in it.");
     cmd.add({"--gpu", "", "also report the EGL device the GPU voxelizer would use (--voxelizer auto uses it when it is hardware)", [&](const std::string&) { gpu = true; }});
-    float fps = RenderConfig{}.fps;
+    RenderConfig frames;  // --frames and what goes with it
+    float& fps = frames.fps;
     cmd.add({"--fps", "F", "frames a second the animations' frames are counted at (default " + numberText(fps) + ")",
              [&](const std::string& v) { fps = cli::parseFloat("--fps", v); }});
+    cmd.add({"--frames", "A-B",
+             "instead of the summary, print each frame's pose as one JSON object a line: {\"frame\", \"time\" (s), \"camera\": "
+             "{\"name\", \"position\", \"forward\", \"up\", \"right\", \"yfov\" (radians)}, \"nodes\": [{\"index\", \"node\", "
+             "\"world\": 16 numbers, column-major}]}, in glTF's axes, as render --frames places them",
+             [&](const std::string& v) { cli::parseFrames(v, frames); }});
+    cmd.add({"--frame-step", "N", "with --frames, every Nth frame", [&](const std::string& v) { frames.frameStep = cli::parseNumber<int>("--frame-step", v); }});
+    cmd.add({"--animation", "NAME", "with --frames, as render's --animation", [&](const std::string& v) { frames.animation = v; }});
+    cmd.add({"--camera", "CAMERA", "with --frames, the camera to pose, as render's --camera", [&](const std::string& v) { frames.camera = v; }});
     bool help;
     std::vector<std::string> pos = cmd.parse(argc, argv, 2, help);
     if (help) return 0;
     if (pos.size() != 1) throw Error(ErrorKind::Config, "info needs exactly one SCENE (see raysplat info --help)");
+    frames.validateFrames();
     std::unique_ptr<Reporter> reporter = cli::makeReporter(false, false);
     Scene s = loadScene(pos[0], *reporter);
+    if (frames.walkthrough()) {
+        cli::printPoses(s, frames);
+        return 0;
+    }
 
     std::map<std::string, int> kinds;
     std::vector<size_t> trisOf(s.materials.size(), 0);

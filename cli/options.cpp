@@ -89,6 +89,14 @@ const Option* Command::find(const std::string& name) const {
     return nullptr;
 }
 
+void parseFrames(const std::string& v, RenderConfig& cfg) {
+    const size_t dash = v.find('-', 1);
+    if (v.empty() || v[0] == '-' || (dash != std::string::npos && dash + 1 < v.size() && v[dash + 1] == '-'))
+        throw Error(ErrorKind::Config, "--frames " + v + ": frames are not negative");
+    cfg.firstFrame = parseNumber<int>("--frames", v.substr(0, dash));
+    cfg.lastFrame = dash == std::string::npos ? cfg.firstFrame : parseNumber<int>("--frames", v.substr(dash + 1));
+}
+
 namespace {
 
 // The occlusion grid's options, shared by render and voxelize.
@@ -154,15 +162,6 @@ void addOutputOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) 
     cmd.add({"--exposure", "STOPS", "exposure of the PNG preview (default " + numberText(d.splat.exposure) + ")", [&](const std::string& v) { cfg.exposure = parseFloat("--exposure", v); }});
 }
 
-// "24" or "1-48": a walkthrough's frames.
-void parseFrames(const std::string& v, RenderConfig& cfg) {
-    const size_t dash = v.find('-', 1);
-    if (v.empty() || v[0] == '-' || (dash != std::string::npos && dash + 1 < v.size() && v[dash + 1] == '-'))
-        throw Error(ErrorKind::Config, "--frames " + v + ": frames are not negative");
-    cfg.firstFrame = parseNumber<int>("--frames", v.substr(0, dash));
-    cfg.lastFrame = dash == std::string::npos ? cfg.firstFrame : parseNumber<int>("--frames", v.substr(dash + 1));
-}
-
 // A walkthrough's frames.
 void addFrameOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
     cmd.add({"--frames", "A-B",
@@ -170,6 +169,8 @@ void addFrameOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
              "written when it is done: '#' in -o, --png and --stats-json is the frame number, zero-padded to as many "
              "digits as there are '#' (walk_####.exr); with several frames and no '#', _NNNN goes before the extension",
              [&](const std::string& v) { parseFrames(v, cfg); }});
+    cmd.add({"--frame-step", "N", "with --frames, render every Nth frame: A, A+N, A+2N … up to B (default 1)",
+             [&](const std::string& v) { cfg.frameStep = parseNumber<int>("--frame-step", v); }});
     cmd.add({"--fps", "F", "frames a second of --frames (default " + numberText(d.splat.fps) + ", as Blender's)",
              [&](const std::string& v) { cfg.fps = parseFloat("--fps", v); }});
     cmd.add({"--animation", "NAME", "with --frames, play only the animation of this name or index (default: all of them together)",

@@ -48,6 +48,8 @@ T parseCount(const std::string& flag, const std::string& s) {
 }
 // "8G", "512M", "64k" or bytes → bytes (binary units).
 uint64_t parseSize(const std::string& flag, const std::string& s);
+// "24" or "1-48" (--frames): a walkthrough's first and last frame.
+void parseFrames(const std::string& v, RenderConfig& cfg);
 // "a,b,c" → three numbers.
 void parseTriple(const std::string& flag, const std::string& s, std::array<float, 3>& out);
 

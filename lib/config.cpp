@@ -139,11 +139,14 @@ void RenderConfig::validateFrames() const {
     if (!walkthrough()) {
         if (!animation.empty()) throw Error(ErrorKind::Config, "`animation` picks what `frames` renders: give `frames` too");
         if (skipExisting) throw Error(ErrorKind::Config, "`skip-existing` skips the frames of `frames`: give `frames` too");
+        if (frameStep != 1) throw Error(ErrorKind::Config, "`frame-step` steps through the frames of `frames`: give `frames` too");
         return;
     }
     const std::string range = std::to_string(firstFrame) + "-" + std::to_string(lastFrame);
     if (lastFrame < firstFrame) throw Error(ErrorKind::Config, "`frames` " + range + " is reversed: the first frame comes after the last");
     if (lastFrame > kMaxFrame) throw Error(ErrorKind::Config, "`frames` " + range + ": frames go up to " + std::to_string(kMaxFrame));
+    if (frameStep < 1 || frameStep > kMaxFrame)
+        throw Error(ErrorKind::Config, "`frame-step` " + std::to_string(frameStep) + " is out of range (1.." + std::to_string(kMaxFrame) + ")");
     if (!vdb.empty()) throw Error(ErrorKind::Config, "`vdb` writes one grid: not with `frames`");
     if (replays()) throw Error(ErrorKind::Config, "`photon` replays a ray of a still: not with `frames`");
     // A walkthrough writes for a long time: refuse a folder it cannot write to before its first frame.

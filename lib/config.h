@@ -77,15 +77,17 @@ struct RenderConfig {
     // Non-empty: the EXR's channels are named as Blender's multilayer EXR of this view layer
     // (writeExrTo), as the Blender add-on loads them.
     std::string blenderLayer;
-    // A walkthrough (lib/walkthrough.h): frames firstFrame..lastFrame of the file's animations,
-    // frame n at time n / fps, each written to its own outputs (framePath). firstFrame < 0: a
-    // still, the nodes as the file writes them.
+    // A walkthrough (lib/walkthrough.h): frames firstFrame, firstFrame + frameStep, … up to
+    // lastFrame of the file's animations, frame n at time n / fps, each written to its own outputs
+    // (framePath). firstFrame < 0: a still, the nodes as the file writes them.
     int firstFrame = -1, lastFrame = -1;
+    int frameStep = 1;
     float fps = 24.f;
     std::string animation;     // the one animation to play, by name or index; empty: all of them
     bool skipExisting = false;  // skip the frames whose outputs all exist
     static constexpr int kMaxFrame = 1000000;
     bool walkthrough() const { return firstFrame >= 0; }
+    int frameCount() const { return walkthrough() ? (lastFrame - firstFrame) / frameStep + 1 : 0; }
     // ≥ 0: replay one photon ray, number `replayIndex` (in merge order) of pass `replayPass`:
     // the image is that ray's splat alone, and its record is reported (docs/design.md §9).
     int replayPass = -1;

@@ -68,7 +68,7 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
     cameraIndex_ = rest.cameraIndex(cfg.camera);  // throws naming it when there is none
     // Whole frames to ranks where there is one for each: the photons of a camera-only range
     // are then traced once a rank, not once a frame's share.
-    wholeFrames_ = ranks.size() > 1 && cfg.lastFrame - cfg.firstFrame + 1 >= ranks.size();
+    wholeFrames_ = ranks.size() > 1 && cfg.frameCount() >= ranks.size();
     if (wholeFrames_) alone_ = std::make_unique<AloneOnSharedMachine>(ranks.sizeOnThisMachine());
 
     // What the range shows that the user may not expect: warnings, once.
@@ -152,7 +152,7 @@ Walkthrough::FrameDone Walkthrough::doFrame(int frame, int left, double secondsL
 // Rank 0 says what became of each frame of the round, in frame order.
 void Walkthrough::reportRound(int firstOfRound, const std::vector<int64_t>& done) {
     for (size_t r = 0; 4 * r < done.size(); ++r) {
-        const int frame = firstOfRound + int(r);
+        const int frame = firstOfRound + int(r) * cfg_.frameStep;
         const int64_t* d = &done[4 * r];
         if (d[0] == FrameDone::kSkipped) reporter_.info("frame " + std::to_string(frame) + ": " + frameConfig(frame).output + " exists, skipped");
         if (d[0] != FrameDone::kRendered) continue;
@@ -166,16 +166,17 @@ void Walkthrough::reportRound(int firstOfRound, const std::vector<int64_t>& done
 
 int Walkthrough::run() {
     const int shares = wholeFrames_ ? ranks_.size() : 1, me = wholeFrames_ ? ranks_.rank() : 0;
-    const int rounds = (cfg_.lastFrame - cfg_.firstFrame + shares) / shares;
+    const int rounds = (cfg_.frameCount() + shares - 1) / shares;
     int rendered = 0, roundsRendered = 0;
     Timer clock;
     // Every rank read the file: no frame is written where one could not.
     if (wholeFrames_) agreeOrStop(ranks_, false);
     for (int round = 0; round < rounds; ++round) {
         throwIfStopped();
-        const int firstOfRound = cfg_.firstFrame + round * shares, frame = firstOfRound + me;
+        const int firstOfRound = cfg_.firstFrame + round * shares * cfg_.frameStep, frame = firstOfRound + me * cfg_.frameStep;
         const double secondsLeft = roundsRendered > 0 ? clock.seconds() / roundsRendered * (rounds - round) : -1.0;
-        const FrameDone done = frame <= cfg_.lastFrame ? doFrame(frame, cfg_.lastFrame - frame, secondsLeft) : FrameDone{};
+        const FrameDone done =
+            frame <= cfg_.lastFrame ? doFrame(frame, (cfg_.lastFrame - frame) / cfg_.frameStep, secondsLeft) : FrameDone{};
         // Every frame of the round is written (by its rank, or by rank 0 where the ranks shared
         // it): the others learn here whether that failed, before the round's report.
         agreeOrStop(ranks_, false);

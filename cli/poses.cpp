@@ -1,0 +1,52 @@
+// `raysplat info --frames` (poses.h).
+#include "poses.h"
+
+#include <cstdio>
+
+#include "core/error.h"
+#include "core/stats.h"
+#include "scene/animation.h"
+
+namespace rs::cli {
+
+namespace {
+
+std::string number(float v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.9g", v + 0.f);  // no "-0"
+    return b;
+}
+
+std::string array(const Vec3& v) { return "[" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "]"; }
+
+std::string array(const Mat4& m) {
+    std::string s = "[";
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) s += number(m[c][r]) + (c == 3 && r == 3 ? "]" : ", ");
+    return s;
+}
+
+}  // namespace
+
+void printPoses(const Scene& scene, const RenderConfig& q) {
+    const SceneAnimation& a = scene.animation;
+    const std::vector<int> selected = a.select(q.animation, scene.path);
+    const int cameraIndex = scene.cameraIndex(q.camera);
+    for (int frame = q.firstFrame; frame <= q.lastFrame; frame += q.frameStep) {
+        // The time and the camera as lib/walkthrough.cpp computes them for a rendered frame.
+        const float t = float(frame) / q.fps;
+        const std::vector<Mat4> pose = a.pose(selected, t);
+        const Camera cam = cameraIndex < 0 ? scene.camera(q.camera)
+                                           : placeCamera(scene.cameras[cameraIndex], a.worldFrom(a.cameraNode[cameraIndex], pose));
+        std::string line = "{\"frame\": " + std::to_string(frame) + ", \"time\": " + number(t) + ", \"camera\": {\"name\": " +
+                           jsonString(cam.name) + ", \"position\": " + array(cam.position) + ", \"forward\": " +
+                           array(cam.forward) + ", \"up\": " + array(cam.up) + ", \"right\": " + array(cam.right) +
+                           ", \"yfov\": " + number(cam.yfov) + "}, \"nodes\": [";
+        for (size_t n = 0; n < pose.size(); ++n)
+            line += std::string(n ? ", " : "") + "{\"index\": " + std::to_string(n) + ", \"node\": " + jsonString(a.nodeNames[n]) +
+                    ", \"world\": " + array(a.worldFrom(int(n), pose)) + "}";
+        std::printf("%s]}\n", line.c_str());
+    }
+}
+
+}  // namespace rs::cli
