@@ -8,7 +8,11 @@
 - the area lamp became an emissive quad of the lamp's power (radiance P / (π A));
 - a render stopped after its first progress line leaves no process and no temporary folder;
 - a missing binary and a failing command are reported with one line, the command's own;
-- "Show occlusion grid" adds a volume lined up with the meshes.
+- "Show occlusion grid" adds a volume lined up with the meshes;
+- Render Animation (Ctrl+F12) of a camera walk, frames 1-3 at step 2: the scene is exported once
+  (only the camera animated, where Blender puts it), one process renders the range, and frames
+  1 and 3 equal `raysplat render --frames 1-3 --frame-step 2` of the exported .glb to the bit;
+  Esc stops it and leaves nothing.
 
 Exit status: 0 PASS, 1 FAIL, 77 skipped (no bpy; with RAYSPLAT_REQUIRE_BLENDER=1 a failure).
 Needs $RAYSPLAT (the binary)."""
@@ -118,6 +122,82 @@ def raysplat_processes(binary):
                 and argv[2].endswith(b"/scene.glb"):
             found.append(int(pid))
     return found
+
+
+def check_animation(bpy, c, scene, binary, work):
+    """Render Animation (Ctrl+F12) of frames 1-3 at step 2, the camera walking: one export, one
+    process for the range, and frames 1 and 3 equal to the CLI's on the exported file. Esc stops
+    it. Returns the kept folder."""
+    import numpy as np
+    import raysplat_addon
+    prefs = bpy.context.preferences.addons["raysplat_addon"].preferences
+    cam = scene.camera
+    scene.frame_set(1)
+    cam.keyframe_insert("location", frame=1)
+    cam.keyframe_insert("rotation_euler", frame=1)
+    cam.location = (cam.location.x + 0.8, cam.location.y + 0.3, cam.location.z - 0.2)
+    cam.rotation_euler.z += math.radians(15)
+    cam.keyframe_insert("location", frame=3)
+    cam.keyframe_insert("rotation_euler", frame=3)
+    scene.frame_start, scene.frame_end, scene.frame_step = 1, 3, 2
+    s = scene.raysplat
+    s.passes, s.photons, s.seed, s.threads = 2, 20000, 3, 2
+    prefs.keep_files = True
+    scene.render.filepath = str(work / "anim_####")
+    tmp_root = Path(tempfile.gettempdir())
+    before = set(tmp_root.glob("raysplat-*"))
+    bpy.ops.render.render(animation=True)
+    kept = sorted(set(tmp_root.glob("raysplat-*")) - before)
+    c.check(raysplat_addon.last_error is None, f"Render Animation succeeded ({raysplat_addon.last_error})")
+    c.check(raysplat_addon.animation_job is None, "the animation's job ended with its last frame")
+    if not c.check(len(kept) == 1 and (kept[0] / "scene.glb").is_file(), "Render Animation exported the scene once, for one process"):
+        return kept
+    glb = kept[0] / "scene.glb"
+    frames = [1, 3]
+    written = sorted(p.name for p in work.glob("anim_*.exr"))
+    c.check(written == [f"anim_{f:04d}.exr" for f in frames], f"Blender wrote frames 1 and 3 of 1-3 at step 2 (got {written})")
+
+    # The exported walk: only the camera moves (the photons are traced once), and where Blender puts it.
+    doc = glb_json(glb)
+    cam_node = next(i for i, n in enumerate(doc["nodes"]) if n.get("camera") is not None)
+    moved = {ch["target"]["node"] for a in doc.get("animations", []) for ch in a["channels"]}
+    c.check(moved == {cam_node}, f"the exported animation moves the camera alone (nodes {sorted(moved)})")
+    out = subprocess.run([binary, "info", str(glb), "--frames", "1-3"], capture_output=True, text=True)
+    poses = {p["frame"]: p["camera"] for p in map(json.loads, out.stdout.splitlines())} if out.returncode == 0 else {}
+    err = 0.0
+    for f in (1, 2, 3):
+        scene.frame_set(f)
+        t = cam.matrix_world.translation
+        err = max(err, max(abs(a - b) for a, b in zip((t.x, t.z, -t.y), poses[f]["position"])) if f in poses else 1.0)
+    c.check(err < 1e-5, f"the exported camera is Blender's at frames 1-3 (max diff {err:.2g} m)")
+
+    # The CLI on the exported file, with the same settings: the same frames, to the bit.
+    cmd = [binary, "render", str(glb), "-o", str(work / "cli_####.exr"), "--frames", "1-3", "--frame-step", "2", "--fps", "24",
+           "--width", str(W), "--height", str(H), "--camera", "view", "--passes", "2", "--photons", "20000", "--seed", "3",
+           "--threads", "1", "--quiet"]
+    c.check(subprocess.run(cmd).returncode == 0, "raysplat render --frames 1-3 --frame-step 2 of the exported .glb")
+    layer = scene.view_layers[0].name
+    images = {}
+    for f in frames:
+        got, want = exr_channels(work / f"anim_{f:04d}.exr"), exr_channels(work / f"cli_{f:04d}.exr")
+        images[f] = want["R"]
+        same = all(np.array_equal(got.get(f"{layer}.Combined.{ch}"), want[ch]) for ch in "RGB") and \
+            all(np.array_equal(got.get(f"{layer}.{name}.{ch}"), want[f"{name.lower()}.{ch}"])
+                for name in ("Direct", "Indirect") for ch in "RGB")
+        c.check(same, f"frame {f}: Combined, Direct and Indirect equal the CLI's frame to the bit")
+    c.check(not np.array_equal(images[1], images[3]), "the camera moved: frames 1 and 3 differ")
+
+    # Esc at the first frame: the process is stopped, nothing is left.
+    prefs.keep_files = False
+    before = set(tmp_root.glob("raysplat-*"))
+    engine_cls = raysplat_addon.RaysplatRenderEngine
+    engine_cls.test_break = lambda self: True
+    bpy.ops.render.render(animation=True)
+    del engine_cls.test_break
+    c.check(raysplat_addon.animation_job is None and set(tmp_root.glob("raysplat-*")) == before,
+            "Esc in Render Animation leaves no job and no temporary folder")
+    c.check(not raysplat_processes(binary), "no raysplat process is left running after Esc")
+    return kept
 
 
 def main():
@@ -277,6 +357,7 @@ def main():
         leaf = 8 * voxel + 0.5 * voxel + 1e-4
         c.check(np.all(np.abs(corners.min(axis=0) - lo) <= leaf) and np.all(np.abs(corners.max(axis=0) - hi) <= leaf),
                 f"the grid's bounds meet the meshes' within a leaf ({leaf:.3f} m)")
+    kept += check_animation(bpy, c, scene, binary, work)
     for d in kept + [work]:
         shutil.rmtree(d, ignore_errors=True)
     return c.finish("blender_addon_check", "the add-on renders as the command does")

@@ -1,6 +1,11 @@
 """raysplat as a Blender render engine: F12 exports the scene with Blender's glTF exporter,
 runs the raysplat command on it, shows its progress, and loads its passes into the render
-result. Esc stops the command (SIGINT); it writes nothing and the add-on removes its files."""
+result. Esc stops the command (SIGINT); it writes nothing and the add-on removes its files.
+
+Render Animation (Ctrl+F12): Blender asks for the frames one at a time. At the first, the scene
+is exported once with its animation and ONE raysplat process renders the whole range (--frames
+start-end --frame-step step), so that the photons are traced once where only the camera moves;
+each later call waits for its frame's file and loads it. Esc stops the process."""
 
 bl_info = {
     "name": "raysplat",
@@ -90,49 +95,127 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
         last_error = None
         scene = depsgraph.scene
         prefs = preferences()
+        if self.is_animation:
+            try:
+                self._render_frame(scene, prefs)
+            except runner.RaysplatError as e:
+                end_animation()
+                self._fail(e)
+            return
         work = tempfile.mkdtemp(prefix="raysplat-")
         try:
             self._render(scene, prefs, work)
         except runner.RaysplatError as e:
-            last_error = str(e)
-            self.report({"ERROR"}, f"raysplat: {e}")
-            if hasattr(self, "error_set"):
-                self.error_set(f"raysplat: {e}")
+            self._fail(e)
         finally:
             if prefs.keep_files and os.path.isdir(work):
                 self.report({"INFO"}, f"raysplat: files kept in {work}")
             else:
                 shutil.rmtree(work, ignore_errors=True)
 
-    def _render(self, scene, prefs, work):
+    def _fail(self, e):
+        global last_error
+        last_error = str(e)
+        self.report({"ERROR"}, f"raysplat: {e}")
+        if hasattr(self, "error_set"):
+            self.error_set(f"raysplat: {e}")
+
+    def _command(self, scene, prefs, glb, exr, animation=False):
+        """Exports the scene to `glb` and returns the command that renders it to `exr`."""
         binary = runner.find_binary(prefs.binary)
-        width, height = export.resolution(scene)
-        glb, exr = os.path.join(work, "scene.glb"), os.path.join(work, "render.exr")
         if scene.camera is None:
             raise runner.RaysplatError("the scene has no active camera")
-        self.update_stats("", "raysplat: exporting glTF")
-        export.export_glb(bpy.context, glb)
+        width, height = export.resolution(scene)
+        self.update_stats("", "raysplat: exporting glTF" + (" with the animation" if animation else ""))
+        export.export_glb(bpy.context, glb, animation=animation)
         layer = scene.view_layers[0].name if len(scene.view_layers) == 1 else bpy.context.view_layer.name
         cmd = [binary, "render", glb, "-o", exr, "--width", str(width), "--height", str(height),
                "--camera", scene.camera.data.name, "--blender-layer", layer, "--progress", "json"]
         cmd += render_options(scene.raysplat) + export.world_options(scene, self.report)
-        with open(os.path.join(work, "command.txt"), "w") as f:
+        if animation:
+            r = scene.render
+            # The exporter times frame n at n / (fps × fps_base) (io_scene_gltf2 4.2): the same here.
+            cmd += ["--frames", f"{scene.frame_start}-{scene.frame_end}", "--frame-step", str(scene.frame_step),
+                    "--fps", f"{r.fps * r.fps_base:.9g}"]
+        with open(os.path.join(os.path.dirname(glb), "command.txt"), "w") as f:
             f.write("\n".join(cmd) + "\n")
+        return cmd
 
-        def on_event(event):
-            if event.get("event") == "progress":
-                done, total = event.get("done", 0), event.get("total", 0)
-                if total:
-                    self.update_progress(min(1.0, (done + event.get("inner_fraction", 0.0)) / total))
-                self.update_stats("", runner.describe(event))
-            elif event.get("event") == "warning":
-                self.report({"WARNING"}, "raysplat: " + event.get("message", ""))
+    def _on_event(self, event):
+        if event.get("event") == "progress":
+            done, total = event.get("done", 0), event.get("total", 0)
+            if total:
+                self.update_progress(min(1.0, (done + event.get("inner_fraction", 0.0)) / total))
+            self.update_stats("", runner.describe(event))
+        elif event.get("event") == "warning":
+            self.report({"WARNING"}, "raysplat: " + event.get("message", ""))
 
-        if not runner.run(cmd, on_event, self.test_break):
-            return  # stopped: nothing was written
+    def _load(self, scene, exr):
+        width, height = export.resolution(scene)
         result = self.begin_result(0, 0, width, height)
         result.load_from_file(exr)
         self.end_result(result)
+
+    def _render(self, scene, prefs, work):
+        exr = os.path.join(work, "render.exr")
+        cmd = self._command(scene, prefs, os.path.join(work, "scene.glb"), exr)
+        if not runner.run(cmd, self._on_event, self.test_break):
+            return  # stopped: nothing was written
+        self._load(scene, exr)
+
+    def _render_frame(self, scene, prefs):
+        """One frame of Render Animation: the range's process started at its first frame (or
+        again when the range or the settings changed), then this frame's file awaited."""
+        global animation_job
+        frame = scene.frame_current
+        key = (scene.name, scene.frame_start, scene.frame_end, scene.frame_step, export.resolution(scene),
+               scene.camera and scene.camera.name, tuple(render_options(scene.raysplat)))
+        job = animation_job
+        if job is None or job.key != key or frame <= job.last:
+            end_animation()
+            work = tempfile.mkdtemp(prefix="raysplat-")
+            job = animation_job = AnimationJob(key, work, prefs.keep_files)
+            cmd = self._command(scene, prefs, os.path.join(work, "scene.glb"), os.path.join(work, "frame_######.exr"),
+                                animation=True)
+            job.frames = runner.FrameRun(cmd, lambda f: os.path.join(work, f"frame_{f:06d}.exr"))
+        exr = job.frames.wait_frame(frame, self._on_event, self.test_break)
+        if exr is None:  # Esc: the process is stopped
+            end_animation()
+            return
+        job.last = frame
+        self._load(scene, exr)
+        if not job.keep:
+            os.remove(exr)
+        if frame + scene.frame_step > scene.frame_end:  # the last frame: the process ends
+            job.frames.finish()
+            end_animation()
+
+
+class AnimationJob:
+    """A Render Animation in progress, kept from frame to frame (Blender makes a new engine each frame)."""
+
+    def __init__(self, key, work, keep):
+        self.key, self.work, self.keep = key, work, keep
+        self.frames = None  # runner.FrameRun
+        self.last = -(1 << 62)  # the last frame handed to Blender
+
+
+animation_job = None
+
+
+def end_animation(*_args):
+    """Stops the Render Animation's process, if any, and removes its folder (unless kept). Also a
+    render_cancel / render_complete handler, so that a job Blender ends is not left running."""
+    global animation_job
+    job, animation_job = animation_job, None
+    if job is None:
+        return
+    if job.frames is not None:
+        job.frames.stop()
+    if job.keep:
+        print(f"raysplat: files kept in {job.work}")
+    else:
+        shutil.rmtree(job.work, ignore_errors=True)
 
 
 class RAYSPLAT_OT_show_grid(bpy.types.Operator):
@@ -226,12 +309,18 @@ CLASSES = (RaysplatPreferences, RaysplatSettings, RaysplatRenderEngine, RAYSPLAT
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
+    for handlers in (bpy.app.handlers.render_cancel, bpy.app.handlers.render_complete):
+        handlers.append(end_animation)
     bpy.types.Scene.raysplat = bpy.props.PointerProperty(type=RaysplatSettings)
     for panel in _compatible_panels():
         panel.COMPAT_ENGINES.add(ENGINE)
 
 
 def unregister():
+    end_animation()
+    for handlers in (bpy.app.handlers.render_cancel, bpy.app.handlers.render_complete):
+        if end_animation in handlers:
+            handlers.remove(end_animation)
     for panel in _compatible_panels():
         panel.COMPAT_ENGINES.discard(ENGINE)
     del bpy.types.Scene.raysplat

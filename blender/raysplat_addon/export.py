@@ -10,6 +10,13 @@ import bpy
 # Blender's exporter writes lamps in these units with this mode: a point or spot lamp of P W as
 # P / 4π W/sr, a sun of S W/m² as S, which is how raysplat reads KHR_lights_punctual.
 LIGHTING_MODE = "COMPAT"
+# A walkthrough's export: the objects' active actions as one glTF animation, sampled at every
+# frame of the scene's range (so that frame n of the file is Blender's frame n, whatever the
+# keys' interpolation, Euler rotations included); objects without an action stay unanimated, so
+# that a camera walk keeps raysplat's photons from frame to frame. (The exporter's SCENE mode,
+# which would bake every object, fails on scenes with lamps in Blender 4.2.)
+ANIMATION = dict(export_animations=True, export_animation_mode="ACTIVE_ACTIONS", export_force_sampling=True,
+                 export_frame_range=True, export_frame_step=1)
 
 
 def _area_lamp_quad(obj, collection):
@@ -73,9 +80,11 @@ def world_options(scene, report):
     return ["--env", path, "--env-strength", f"{strength:.9g}", "--env-rotation", f"{rotation:.9g}"]
 
 
-def export_glb(context, path):
+def export_glb(context, path, animation=False):
     """Writes the scene to `path` with the glTF exporter: renderable objects, cameras, lamps and
-    custom properties (raysplat_portal). Area lamps go as emissive quads, removed afterwards."""
+    custom properties (raysplat_portal). Area lamps go as emissive quads, removed afterwards.
+    With `animation`, the scene as it plays: every object's action sampled at each frame of the
+    scene's range into one glTF animation, frame n at time n / (fps × fps_base)."""
     scene = context.scene
     temporary = []
     try:
@@ -85,7 +94,8 @@ def export_glb(context, path):
         with context.temp_override(scene=scene):
             bpy.ops.export_scene.gltf(filepath=path, export_format="GLB", use_renderable=True, export_cameras=True,
                                       export_lights=True, export_extras=True, export_apply=True, export_yup=True,
-                                      export_import_convert_lighting_mode=LIGHTING_MODE)
+                                      export_import_convert_lighting_mode=LIGHTING_MODE,
+                                      **(ANIMATION if animation else {}))
     finally:
         for quad, mesh, mat in temporary:
             bpy.data.objects.remove(quad)

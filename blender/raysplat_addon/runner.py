@@ -140,11 +140,59 @@ def run(cmd, on_event=None, should_stop=None, poll=0.05):
     return True
 
 
+class FrameRun:
+    """One command rendering a walkthrough (--frames A-B [--frame-step N] --progress json, -o with
+    '#'s) for Blender's Render Animation, which asks for its frames one at a time, in order.
+    `output(frame)` is frame's file; a frame is done when its file exists, since the command
+    writes each frame whole, by a rename, when it is done."""
+
+    def __init__(self, cmd, output):
+        self.output = output
+        self.run = Run(cmd)
+        self._seen = 0
+
+    def wait_frame(self, frame, on_event=None, should_stop=None, poll=0.05):
+        """Waits until `frame`'s file is written and returns its path; on_event sees the events
+        meanwhile. Returns None, the command stopped, when should_stop() says so. Raises
+        RaysplatError with the command's message when it ends without writing the frame."""
+        path = self.output(frame)
+        while True:
+            status = self.run.proc.poll()
+            events = self.run.take_events(self._seen)
+            self._seen += len(events)
+            for e in events:
+                if on_event:
+                    on_event(e)
+            if os.path.exists(path):
+                return path
+            if status is not None:
+                self.run.wait()
+                if os.path.exists(path):
+                    return path
+                message = last_error(self.run.lines) if status != 0 else None
+                raise RaysplatError(message or f"{os.path.basename(self.run.cmd[0])} ended (status {status}) "
+                                                f"without writing frame {frame}")
+            if should_stop and should_stop():
+                self.stop()
+                return None
+            time.sleep(poll)
+
+    def stop(self):
+        self.run.stop()
+
+    def finish(self):
+        """Waits for the command's end (its last frame handed over); raises on a failure."""
+        status = self.run.wait()
+        if status != 0:
+            raise RaysplatError(last_error(self.run.lines) or f"{os.path.basename(self.run.cmd[0])} exited with status {status}")
+
+
 def describe(event):
     """A status line for Blender's header from a progress event."""
     if event.get("event") != "progress":
         return None
-    text = f"raysplat: {event.get('stage', '')} {event.get('done', 0)}/{event.get('total', 0)}"
+    frame = f"frame {event['frame']}: " if "frame" in event else ""
+    text = f"raysplat: {frame}{event.get('stage', '')} {event.get('done', 0)}/{event.get('total', 0)}"
     if "inner" in event:
         text += f" · {event['inner']} {int(100 * event.get('inner_fraction', 0))} %"
     return text
