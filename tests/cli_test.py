@@ -353,6 +353,8 @@ def bad_frames_tests(tmp):
         case("--animation names nothing", ["--frames", "1", "--animation", "run"], "interior_walk.gltf", "--animation run"),
         case("--animation index past the end", ["--frames", "1", "--animation", "1"], "interior_walk.gltf", "--animation 1"),
         case("--animation without --frames", ["--animation", "walk"], "--animation", "--frames"),
+        case("--frame-step 0", ["--frames", "1-4", "--frame-step", "0"], "--frame-step 0", "out of range"),
+        case("--frame-step without --frames", ["--frame-step", "2"], "--frame-step", "--frames"),
         case("-o pattern in a missing directory", ["--frames", "1-2"], missing, exr=missing),
     ]
 
@@ -383,8 +385,8 @@ def test_frames_are_numbered_and_skip_existing_continues():
 
 
 def test_frame_alone_equals_frame_in_range():
-    """Frame 3 rendered alone (1 thread) and within --frames 1-4 (2 threads): the same pixels;
-    frames 1 and 3 differ (the camera walks). Frames past the animation's end hold its last
+    """Frame 3 rendered alone (1 thread), within --frames 1-4 (2 threads) and within 1-4 at
+    --frame-step 2 (which writes 1 and 3 alone): the same pixels; frames 1 and 3 differ (the camera walks). Frames past the animation's end hold its last
     pose: 48 and 49 (at 24 fps the walk ends at frame 48) are the same image, with a warning."""
     with tempfile.TemporaryDirectory(prefix="raysplat_cli_out_") as out:
         r = run(*walk_args("-o", os.path.join(out, "alone.exr"), "--frames", "3", "--threads", "1"), timeout=300)
@@ -396,6 +398,13 @@ def test_frame_alone_equals_frame_in_range():
             with open(os.path.join(out, name), "rb") as f:
                 pixels[name] = exr_pixel_chunks(f.read())
         check(pixels["alone.exr"] == pixels["range_0003.exr"], "frame 3 alone and in 1-4 differ")
+        # Every second frame: 1 and 3, and frame 3 the same image.
+        r = run(*walk_args("-o", os.path.join(out, "step_#.exr"), "--frames", "1-4", "--frame-step", "2"), timeout=300)
+        check(r.returncode == 0, "render --frames 1-4 --frame-step 2 failed: %s" % r.stderr)
+        check(sorted(f for f in os.listdir(out) if f.startswith("step")) == ["step_1.exr", "step_3.exr"],
+              "--frame-step 2 wrote %s" % sorted(os.listdir(out)))
+        check(exr_pixel_chunks(open(os.path.join(out, "step_3.exr"), "rb").read()) == pixels["alone.exr"],
+              "frame 3 of 1-4 at step 2 differs from frame 3 alone")
         check(pixels["range_0001.exr"] != pixels["range_0003.exr"], "frames 1 and 3 are the same image")
         r = run(*walk_args("-o", os.path.join(out, "end_##.exr"), "--frames", "48-49"), timeout=300)
         check(r.returncode == 0, "render --frames 48-49 failed: %s" % r.stderr)
@@ -420,6 +429,25 @@ def test_progress_json_carries_the_frame_and_info_lists_animations():
     check(r.returncode == 0, "info failed: %s" % r.stderr)
     check("0 'walk': 0 to 2 s, frames 0-24: node 84 'camera_rig' translation; node 85 'camera' rotation" in r.stdout,
           "info does not list the walk: %s" % r.stdout)
+
+
+def test_info_frames_prints_each_frames_pose():
+    """info --frames A-B --frame-step N: one JSON line a frame, node 0 moved by a LINEAR key from
+    x = 0 at 0 s to x = 1 at 1 s, at 4 fps: x = f / 4 (held at 1 after the last key); the
+    framing camera (the file has none) does not move."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_cli_in_") as tmp:
+        scene = write_json(os.path.join(tmp, "moving.gltf"), animated_gltf())
+        r = run("info", scene, "--frames", "0-6", "--frame-step", "2", "--fps", "4")
+        check(r.returncode == 0, "info --frames failed: %s" % r.stderr)
+        poses = [json.loads(line) for line in r.stdout.splitlines()]
+        check([p["frame"] for p in poses] == [0, 2, 4, 6], "frames %s" % [p["frame"] for p in poses])
+        for p in poses:
+            world = p["nodes"][0]["world"]  # column-major: the translation is 12..14
+            want = min(p["frame"] / 4.0, 1.0)
+            check(abs(p["time"] - p["frame"] / 4.0) < 1e-7, "frame %d at %s s" % (p["frame"], p["time"]))
+            check(abs(world[12] - want) < 1e-6 and world[13] == 0 and world[14] == 0 and world[:12] == [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0],
+                  "frame %d: node 0's world matrix %s, expected x = %g" % (p["frame"], world, want))
+        check(all(p["camera"] == poses[0]["camera"] for p in poses), "the framing camera moved")
 
 
 def bad_setting_tests(tmp):
@@ -978,6 +1006,7 @@ def main():
             test_frames_are_numbered_and_skip_existing_continues,
             test_frame_alone_equals_frame_in_range,
             test_progress_json_carries_the_frame_and_info_lists_animations,
+            test_info_frames_prints_each_frames_pose,
             test_a_stopped_walkthrough_leaves_whole_frames,
             test_morph_targets_warn_once_and_render_the_rest_pose,
         )]
