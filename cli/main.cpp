@@ -146,7 +146,7 @@ int cmdInfo(int argc, char** argv) {
     cmd.add({"--frames", "A-B",
              "instead of the summary, print each frame's pose as one JSON object a line: {\"frame\", \"time\" (s), \"camera\": "
              "{\"name\", \"position\", \"forward\", \"up\", \"right\", \"yfov\" (radians)}, \"nodes\": [{\"index\", \"node\", "
-             "\"world\": 16 numbers, column-major}]}, in glTF's axes, as render --frames places them",
+             "\"world\": 16 numbers, column-major}], \"objects\": [{\"name\", \"lo\", \"hi\"}] (each primitive's world bounds)}, in glTF's axes, as render --frames places them",
              [&](const std::string& v) { cli::parseFrames(v, frames); }});
     cmd.add({"--frame-step", "N", "with --frames, every Nth frame", [&](const std::string& v) { frames.frameStep = cli::parseNumber<int>("--frame-step", v); }});
     cmd.add({"--animation", "NAME", "with --frames, as render's --animation", [&](const std::string& v) { frames.animation = v; }});

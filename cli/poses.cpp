@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "core/stats.h"
 #include "scene/animation.h"
 
@@ -19,6 +20,21 @@ std::string number(float v) {
 
 std::string array(const Vec3& v) { return "[" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "]"; }
 
+// Each primitive's world bounds ("objects", Scene::objectNames) in `scene`'s triangles.
+std::string objectBounds(const Scene& scene) {
+    std::vector<Vec3> lo(scene.objectNames.size(), Vec3(kInf)), hi(scene.objectNames.size(), Vec3(-kInf));
+    for (size_t t = 0; t < scene.triObject.size(); ++t)
+        for (int v = 0; v < 3; ++v) {
+            lo[scene.triObject[t]] = glm::min(lo[scene.triObject[t]], scene.positions[3 * t + v]);
+            hi[scene.triObject[t]] = glm::max(hi[scene.triObject[t]], scene.positions[3 * t + v]);
+        }
+    std::string s;
+    for (size_t o = 0; o < lo.size(); ++o)
+        s += std::string(o ? ", " : "") + "{\"name\": " + jsonString(scene.objectNames[o]) + ", \"lo\": " + array(lo[o]) +
+             ", \"hi\": " + array(hi[o]) + "}";
+    return s;
+}
+
 std::string array(const Mat4& m) {
     std::string s = "[";
     for (int c = 0; c < 4; ++c)
@@ -32,6 +48,9 @@ void printPoses(const Scene& scene, const RenderConfig& q) {
     const SceneAnimation& a = scene.animation;
     const std::vector<int> selected = a.select(q.animation, scene.path);
     const int cameraIndex = scene.cameraIndex(q.camera);
+    // Where only cameras move, the walkthrough renders the triangles as loaded; else each frame's own.
+    const bool camerasOnly = a.movesOnlyCameras(selected);
+    const std::string restObjects = camerasOnly ? objectBounds(scene) : "";
     for (int frame = q.firstFrame; frame <= q.lastFrame; frame += q.frameStep) {
         // The time and the camera as lib/walkthrough.cpp computes them for a rendered frame.
         const float t = float(frame) / q.fps;
@@ -45,7 +64,8 @@ void printPoses(const Scene& scene, const RenderConfig& q) {
         for (size_t n = 0; n < pose.size(); ++n)
             line += std::string(n ? ", " : "") + "{\"index\": " + std::to_string(n) + ", \"node\": " + jsonString(a.nodeNames[n]) +
                     ", \"world\": " + array(a.worldFrom(int(n), pose)) + "}";
-        std::printf("%s]}\n", line.c_str());
+        const std::string objects = camerasOnly ? restObjects : objectBounds(loadScene(scene.path, silentReporter(), q.threads, &pose));
+        std::printf("%s], \"objects\": [%s]}\n", line.c_str(), objects.c_str());
     }
 }
 

@@ -26,8 +26,9 @@ time n / fps, placed as `render --frames` places them.
 2. An interpolation scene like Khronos's InterpolationTest, written here as .gltf: nine cubes, one
    each for STEP, LINEAR and CUBICSPLINE on translation, rotation and scale. Blender's importer
    reads it into an empty scene; each cube's world matrix (turned into glTF's axes) at each frame
-   equals raysplat's node matrix. Where Blender's importer cannot be the answer by definition:
-   LINEAR rotations are its normalized lerp (compared on keys and half-way, and elsewhere with
+   equals raysplat's node matrix, and the cube's corners placed by it bound the triangles raysplat
+   renders at that frame (info's "objects", the file loaded posed). Where Blender's importer
+   cannot be the answer by definition: LINEAR rotations are its normalized lerp (compared on keys and half-way, and elsewhere with
    mathutils' slerp of the keys), and Blender 4.2's importer drops CUBICSPLINE tangents (its
    keys get automatic handles), so CUBICSPLINE cubes are compared with Blender on the keys and
    between them with glTF 2.0 Appendix C's Hermite spline evaluated here in Python.
@@ -313,7 +314,7 @@ def trs_matrix(t, q, s):
 
 
 def check_interpolation(bpy, c, binary, work):
-    from mathutils import Matrix
+    from mathutils import Matrix, Vector
     gltf = work / "interpolation.gltf"
     doc = write_interpolation_gltf(gltf)
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -335,7 +336,7 @@ def check_interpolation(bpy, c, binary, work):
         for f in key_frames:
             scene.frame_set(f)
             key_rot[f] = obj.matrix_world.to_quaternion()
-        err, with_blender, other = 0.0, [], []
+        err, err_box, with_blender, other = 0.0, 0.0, [], []
         for f in range(0, last + 1):
             scene.frame_set(f)
             want = to_g @ obj.matrix_world @ to_g.inverted()
@@ -359,10 +360,17 @@ def check_interpolation(bpy, c, binary, work):
                 with_blender.append(f)
             m = got[f]["nodes"][i]["world"]  # column-major
             err = max(err, max(abs(want[r][col] - m[4 * col + r]) for r in range(4) for col in range(4)))
+            # The triangles a render of the frame uses: the cube's corners placed by `want`.
+            corners = [want @ Vector((*v, 1.0)) for v in cube_mesh()[0]]
+            box = next(o for o in got[f]["objects"] if f"(node {i} " in o["name"])
+            lo = [min(v[k] for v in corners) for k in range(3)]
+            hi = [max(v[k] for v in corners) for k in range(3)]
+            err_box = max(err_box, max_diff(lo, box["lo"]), max_diff(hi, box["hi"]))
         how = f"Blender's importer at frames {with_blender[0]}-{with_blender[-1]}" if not other else \
             f"Blender's importer at frames {', '.join(map(str, with_blender))}, " + \
             ("glTF's Hermite" if interp == "CUBICSPLINE" else "slerp of Blender's keys") + " between"
-        c.check(err < TOL, f"cube '{node['name']}': raysplat's world matrix equals {how} (max diff {err:.2g})")
+        c.check(err < TOL and err_box < TOL, f"cube '{node['name']}': raysplat's world matrix and its triangles' bounds equal "
+                                             f"{how} (max diff {err:.2g}, bounds {err_box:.2g} m)")
 
 
 def main():
