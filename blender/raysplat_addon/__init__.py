@@ -34,6 +34,7 @@ PASSES = [  # (Blender pass, channels, type): the CLI's layers as --blender-laye
     ("Normal", "XYZ", "VECTOR"),
 ]
 last_error = None  # the last failure's message, as reported (for scripts and tests)
+last_stopped = False  # whether Esc stopped the last render (for scripts and tests)
 
 
 def preferences(context=None):
@@ -91,8 +92,8 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, name, len(channels), channels, kind)
 
     def render(self, depsgraph):
-        global last_error
-        last_error = None
+        global last_error, last_stopped
+        last_error, last_stopped = None, False
         scene = depsgraph.scene
         prefs = preferences()
         if self.is_animation:
@@ -120,8 +121,10 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
         if hasattr(self, "error_set"):
             self.error_set(f"raysplat: {e}")
 
-    def _command(self, scene, prefs, glb, exr, animation=False):
-        """Exports the scene to `glb` and returns the command that renders it to `exr`."""
+    def _command(self, scene, prefs, glb, exr, first_frame=None):
+        """Exports the scene to `glb` and returns the command that renders it to `exr`; with
+        `first_frame`, the animation too, and the frames from it to the scene's end."""
+        animation = first_frame is not None
         binary = runner.find_binary(prefs.binary)
         if scene.camera is None:
             raise runner.RaysplatError("the scene has no active camera")
@@ -135,11 +138,16 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
         if animation:
             r = scene.render
             # The exporter times frame n at n / (fps × fps_base) (io_scene_gltf2 4.2): the same here.
-            cmd += ["--frames", f"{scene.frame_start}-{scene.frame_end}", "--frame-step", str(scene.frame_step),
+            cmd += ["--frames", f"{first_frame}-{scene.frame_end}", "--frame-step", str(scene.frame_step),
                     "--fps", f"{r.fps * r.fps_base:.9g}"]
         with open(os.path.join(os.path.dirname(glb), "command.txt"), "w") as f:
             f.write("\n".join(cmd) + "\n")
         return cmd
+
+    def _stop_asked(self):
+        """Esc: Blender's test_break. (A test replaces this method: RNA's test_break itself
+        cannot be overridden from Python, its functions come before a class's attributes.)"""
+        return self.test_break()
 
     def _on_event(self, event):
         if event.get("event") == "progress":
@@ -159,14 +167,16 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
     def _render(self, scene, prefs, work):
         exr = os.path.join(work, "render.exr")
         cmd = self._command(scene, prefs, os.path.join(work, "scene.glb"), exr)
-        if not runner.run(cmd, self._on_event, self.test_break):
+        global last_stopped
+        if not runner.run(cmd, self._on_event, self._stop_asked):
+            last_stopped = True
             return  # stopped: nothing was written
         self._load(scene, exr)
 
     def _render_frame(self, scene, prefs):
         """One frame of Render Animation: the range's process started at its first frame (or
         again when the range or the settings changed), then this frame's file awaited."""
-        global animation_job
+        global animation_job, last_stopped
         frame = scene.frame_current
         key = (scene.name, scene.frame_start, scene.frame_end, scene.frame_step, export.resolution(scene),
                scene.camera and scene.camera.name, tuple(render_options(scene.raysplat)))
@@ -175,11 +185,14 @@ class RaysplatRenderEngine(bpy.types.RenderEngine):
             end_animation()
             work = tempfile.mkdtemp(prefix="raysplat-")
             job = animation_job = AnimationJob(key, work, prefs.keep_files)
+            # From this frame on: Blender starts past the frames whose files exist when it may
+            # not overwrite them, and a frame is the same image in any range.
             cmd = self._command(scene, prefs, os.path.join(work, "scene.glb"), os.path.join(work, "frame_######.exr"),
-                                animation=True)
+                                first_frame=frame)
             job.frames = runner.FrameRun(cmd, lambda f: os.path.join(work, f"frame_{f:06d}.exr"))
-        exr = job.frames.wait_frame(frame, self._on_event, self.test_break)
+        exr = job.frames.wait_frame(frame, self._on_event, self._stop_asked)
         if exr is None:  # Esc: the process is stopped
+            last_stopped = True
             end_animation()
             return
         job.last = frame
