@@ -211,6 +211,18 @@ def check_animation(bpy, c, scene, binary, work):
     c.check(raysplat_addon.animation_job is None and not job_dir.exists() and job.frames.run.proc.poll() is not None,
             "render_cancel stops the animation's process and removes its folder")
     c.check(not raysplat_processes(binary), "no raysplat process is left running")
+
+    # A failing command stops Render Animation with its own one-line message.
+    prefs.keep_files = False
+    s.light_samples = 5000
+    try:
+        bpy.ops.render.render(animation=True)
+    except RuntimeError:
+        pass
+    s.light_samples = 0
+    e = raysplat_addon.last_error
+    c.check(e is not None and "light-samples" in e and "\n" not in e and raysplat_addon.animation_job is None,
+            f"a failing command ends Render Animation with its message in one line: {e}")
     return kept
 
 
