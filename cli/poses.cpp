@@ -7,6 +7,7 @@
 #include "core/log.h"
 #include "core/stats.h"
 #include "scene/animation.h"
+#include "walkthrough.h"
 
 namespace rs::cli {
 
@@ -19,6 +20,13 @@ std::string number(float v) {
 }
 
 std::string array(const Vec3& v) { return "[" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "]"; }
+
+std::string array(const Mat4& m) {
+    std::string s = "[";
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) s += number(m[c][r]) + (c == 3 && r == 3 ? "]" : ", ");
+    return s;
+}
 
 // Each primitive's world bounds ("objects", Scene::objectNames) in `scene`'s triangles.
 std::string objectBounds(const Scene& scene) {
@@ -35,13 +43,6 @@ std::string objectBounds(const Scene& scene) {
     return s;
 }
 
-std::string array(const Mat4& m) {
-    std::string s = "[";
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) s += number(m[c][r]) + (c == 3 && r == 3 ? "]" : ", ");
-    return s;
-}
-
 }  // namespace
 
 void printPoses(const Scene& scene, const RenderConfig& q) {
@@ -52,11 +53,10 @@ void printPoses(const Scene& scene, const RenderConfig& q) {
     const bool camerasOnly = a.movesOnlyCameras(selected);
     const std::string restObjects = camerasOnly ? objectBounds(scene) : "";
     for (int frame = q.firstFrame; frame <= q.lastFrame; frame += q.frameStep) {
-        // The time and the camera as lib/walkthrough.cpp computes them for a rendered frame.
-        const float t = float(frame) / q.fps;
+        // The time and the camera as the walkthrough computes them for a rendered frame.
+        const float t = frameTime(frame, q.fps);
         const std::vector<Mat4> pose = a.pose(selected, t);
-        const Camera cam = cameraIndex < 0 ? scene.camera(q.camera)
-                                           : placeCamera(scene.cameras[cameraIndex], a.worldFrom(a.cameraNode[cameraIndex], pose));
+        const Camera cam = posedCamera(scene, cameraIndex, q.camera, pose);
         std::string line = "{\"frame\": " + std::to_string(frame) + ", \"time\": " + number(t) + ", \"camera\": {\"name\": " +
                            jsonString(cam.name) + ", \"position\": " + array(cam.position) + ", \"forward\": " +
                            array(cam.forward) + ", \"up\": " + array(cam.up) + ", \"right\": " + array(cam.right) +

@@ -91,21 +91,20 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
 
 Walkthrough::~Walkthrough() = default;
 
-Camera Walkthrough::cameraAt(const std::vector<Mat4>& pose) const {
-    const Scene& rest = file_->scene();
-    if (cameraIndex_ < 0) return rest.camera(cfg_.camera);  // the framing camera does not move
+Camera posedCamera(const Scene& rest, int index, const std::string& which, const std::vector<Mat4>& pose) {
+    if (index < 0) return rest.camera(which);
     const SceneAnimation& a = rest.animation;
-    return placeCamera(rest.cameras[cameraIndex_], a.worldFrom(a.cameraNode[cameraIndex_], pose));
+    return placeCamera(rest.cameras[index], a.worldFrom(a.cameraNode[index], pose));
 }
 
 RenderResult Walkthrough::renderFrame(int frame) {
-    const float t = float(frame) / cfg_.fps;
+    const float t = frameTime(frame, cfg_.fps);
     const std::vector<Mat4> pose = file_->scene().animation.pose(selected_, t);
     RenderResult result;
     if (camerasOnly_) {
         // The scene as read and the photons of the frames before: only the camera is posed.
         if (!prepared_) prepared_ = std::make_unique<PreparedScene>(file_->scene(), cfg_, reporter_, frameRanks());
-        result = prepared_->render(cameraAt(pose), store_.get());
+        result = prepared_->render(posedCamera(file_->scene(), cameraIndex_, cfg_.camera, pose), store_.get());
     } else {
         // Meshes or lights move: the nodes flattened at the frame's pose from the file as read,
         // and what depends on the geometry built for this frame alone.

@@ -34,6 +34,14 @@ namespace rs {
 // (walk.exr → walk_0024.exr); else the pattern as it is.
 std::string framePath(const std::string& pattern, int frame, bool several);
 
+// Frame `frame`'s time, frame / fps seconds, as every frame is posed.
+inline float frameTime(int frame, float fps) { return float(frame) / fps; }
+
+// The camera a frame renders where only cameras move: camera `index` of `rest` (its
+// Scene::cameraIndex) placed by `pose` (SceneAnimation::pose); the framing camera (index < 0,
+// `which` as --camera gives it) does not move.
+Camera posedCamera(const Scene& rest, int index, const std::string& which, const std::vector<Mat4>& pose);
+
 class Walkthrough {
 public:
     // Reads cfg.scene and chooses its animations (cfg.animation); warns where frames fall outside
@@ -62,7 +70,6 @@ private:
     };
     FrameDone doFrame(int frame, int left, double secondsLeft);
     void reportRound(int firstOfRound, const std::vector<int64_t>& done);
-    Camera cameraAt(const std::vector<Mat4>& pose) const;
     Ranks& frameRanks() { return alone_ ? *alone_ : ranks_; }
 
     const RenderConfig& cfg_;
