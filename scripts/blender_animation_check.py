@@ -33,6 +33,10 @@ time n / fps, placed as `render --frames` places them.
    keys get automatic handles), so CUBICSPLINE cubes are compared with Blender on the keys and
    between them with glTF 2.0 Appendix C's Hermite spline evaluated here in Python.
 
+3. The add-on's export for Render Animation (every object's action sampled at each frame) of a
+   camera keyed on location and Euler rotation at 30 / 1.001 fps: with --fps fps × fps_base, the
+   time the exporter gives frame n, raysplat's camera is Blender's at every frame.
+
 Exit status: 0 PASS, 1 FAIL, 77 skipped (no bpy; with RAYSPLAT_REQUIRE_BLENDER=1 a failure).
 Needs $RAYSPLAT (the binary)."""
 
@@ -373,6 +377,52 @@ def check_interpolation(bpy, c, binary, work):
                                              f"{how} (max diff {err:.2g}, bounds {err_box:.2g} m)")
 
 
+# 3. The add-on's export for Render Animation --------------------------------------------------
+
+def check_addon_export(bpy, c, binary, work):
+    """The add-on's walkthrough export (export.ANIMATION: the actions sampled at every frame) of a
+    camera keyed on location and Euler rotation at 30 / 1.001 fps: at --fps fps × fps_base, the
+    exporter's timing, raysplat's camera is Blender's at every frame; at fps / fps_base, the
+    scene's real rate, it is not (so the check can tell)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "blender"))
+    from raysplat_addon import export as addon_export
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = 30, 1.001
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = W, H, 100
+    bpy.ops.mesh.primitive_cube_add()
+    cam = bpy.data.objects.new("walker", bpy.data.cameras.new("walker"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    for frame, loc, rot in ((1, (3, -4, 1.6), (80, 0, 30)), (6, (2, -2, 1.7), (85, 5, 60)), (12, (0, -1, 1.5), (75, -5, 100))):
+        cam.location, cam.rotation_euler = loc, [math.radians(a) for a in rot]
+        cam.keyframe_insert("location", frame=frame)
+        cam.keyframe_insert("rotation_euler", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 12
+    glb = work / "addon_walk.glb"
+    bpy.ops.export_scene.gltf(filepath=str(glb), export_format="GLB", export_cameras=True, export_yup=True,
+                              **addon_export.ANIMATION)
+
+    def worst(fps):
+        r = subprocess.run([binary, "info", str(glb), "--frames", "1-12", "--fps", f"{fps:.9g}"], capture_output=True, text=True)
+        if r.returncode != 0:
+            return float("inf")
+        got = {p["frame"]: p["camera"] for p in map(json.loads, r.stdout.splitlines())}
+        err = 0.0
+        for f in range(1, 13):
+            scene.frame_set(f)
+            m = cam.matrix_world
+            err = max(err, max_diff(to_gltf(m.translation), got[f]["position"]),
+                      max_diff(to_gltf(-m.col[2].xyz.normalized()), got[f]["forward"]))
+        return err
+
+    r = scene.render
+    right, naive = worst(r.fps * r.fps_base), worst(r.fps / r.fps_base)
+    c.check(right < TOL, f"the add-on's export at 30 / 1.001 fps: --fps fps × fps_base places the camera as Blender at "
+                         f"frames 1-12 (max diff {right:.2g})")
+    c.check(naive > 100 * TOL, f"... and --fps fps / fps_base would not (max diff {naive:.2g})")
+
+
 def main():
     reexec_under_bpy_python(__file__)
     required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
@@ -390,6 +440,7 @@ def main():
     try:
         check_cameras(bpy, c, binary, work)
         check_interpolation(bpy, c, binary, work)
+        check_addon_export(bpy, c, binary, work)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return c.finish("blender_animation_check", f"cameras and nodes equal Blender's to {TOL:g}")
