@@ -157,11 +157,12 @@ int cmdInfo(int argc, char** argv) {
     if (pos.size() != 1) throw Error(ErrorKind::Config, "info needs exactly one SCENE (see raysplat info --help)");
     frames.validateFrames();
     std::unique_ptr<Reporter> reporter = cli::makeReporter(false, false);
-    Scene s = loadScene(pos[0], *reporter);
     if (frames.walkthrough()) {
-        cli::printPoses(s, frames);
+        SceneFile file(pos[0], *reporter);
+        cli::printPoses(file, frames);
         return 0;
     }
+    Scene s = loadScene(pos[0], *reporter);
 
     std::map<std::string, int> kinds;
     std::vector<size_t> trisOf(s.materials.size(), 0);

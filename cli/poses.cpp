@@ -4,7 +4,6 @@
 #include <cstdio>
 
 #include "core/error.h"
-#include "core/log.h"
 #include "core/stats.h"
 #include "scene/animation.h"
 #include "walkthrough.h"
@@ -45,18 +44,19 @@ std::string objectBounds(const Scene& scene) {
 
 }  // namespace
 
-void printPoses(const Scene& scene, const RenderConfig& q) {
-    const SceneAnimation& a = scene.animation;
-    const std::vector<int> selected = a.select(q.animation, scene.path);
-    const int cameraIndex = scene.cameraIndex(q.camera);
-    // Where only cameras move, the walkthrough renders the triangles as loaded; else each frame's own.
+void printPoses(SceneFile& file, const RenderConfig& q) {
+    const SceneAnimation a = file.scene().animation;  // posing replaces the file's scene
+    const std::vector<int> selected = a.select(q.animation, file.scene().path);
+    const int cameraIndex = file.scene().cameraIndex(q.camera);
+    // Where only cameras move, the walkthrough renders the triangles as read, the camera placed
+    // by the pose; else the scene flattened at each frame's pose, with its camera.
     const bool camerasOnly = a.movesOnlyCameras(selected);
-    const std::string restObjects = camerasOnly ? objectBounds(scene) : "";
+    const std::string restObjects = camerasOnly ? objectBounds(file.scene()) : "";
     for (int frame = q.firstFrame; frame <= q.lastFrame; frame += q.frameStep) {
-        // The time and the camera as the walkthrough computes them for a rendered frame.
         const float t = frameTime(frame, q.fps);
         const std::vector<Mat4> pose = a.pose(selected, t);
-        const Camera cam = posedCamera(scene, cameraIndex, q.camera, pose);
+        const Scene* posed = camerasOnly ? nullptr : &file.pose(pose);
+        const Camera cam = posed ? posed->camera(q.camera) : posedCamera(file.scene(), cameraIndex, q.camera, pose);
         std::string line = "{\"frame\": " + std::to_string(frame) + ", \"time\": " + number(t) + ", \"camera\": {\"name\": " +
                            jsonString(cam.name) + ", \"position\": " + array(cam.position) + ", \"forward\": " +
                            array(cam.forward) + ", \"up\": " + array(cam.up) + ", \"right\": " + array(cam.right) +
@@ -64,8 +64,7 @@ void printPoses(const Scene& scene, const RenderConfig& q) {
         for (size_t n = 0; n < pose.size(); ++n)
             line += std::string(n ? ", " : "") + "{\"index\": " + std::to_string(n) + ", \"node\": " + jsonString(a.nodeNames[n]) +
                     ", \"world\": " + array(a.worldFrom(int(n), pose)) + "}";
-        const std::string objects = camerasOnly ? restObjects : objectBounds(loadScene(scene.path, silentReporter(), q.threads, &pose));
-        std::printf("%s], \"objects\": [%s]}\n", line.c_str(), objects.c_str());
+        std::printf("%s], \"objects\": [%s]}\n", line.c_str(), (posed ? objectBounds(*posed) : restObjects).c_str());
     }
 }
 
