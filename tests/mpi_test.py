@@ -168,6 +168,20 @@ def test_fewer_frames_than_ranks_are_divided():
         cli.check(many[f][1]["ranks"] == 3, "frame %d was rendered by %r ranks" % (f, many[f][1]["ranks"]))
 
 
+def test_frame_step_deals_every_nth_frame():
+    """mpirun -n 2 … --frames 1-5 --frame-step 2: frames 1, 3 and 5 alone are written, whole
+    frames to ranks (rank 0: 1 and 5, rank 1: 3), each the one process's."""
+    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
+        one, _ = walk(out, "one", 0, "--frame-step", "2", frames=(1, 5))
+        many, err = walk(out, "many", 2, "--threads", "1", "--frame-step", "2", frames=(1, 5))
+    cli.check(sorted(one) == [1, 3, 5] and sorted(many) == [1, 3, 5], "frames written: %r, %r" % (sorted(one), sorted(many)))
+    for f in (1, 3, 5):
+        cli.check(many[f][0] == one[f][0], "frame %d of 2 ranks differs from one process's" % f)
+        cli.check(many[f][1]["ranks"] == 1, "frame %d was divided between %r ranks" % (f, many[f][1]["ranks"]))
+    wrote = [line for line in err.splitlines() if "wrote" in line]
+    cli.check(len(wrote) == 3 and "(frame 3, rank 1," in wrote[1] and "(frame 5, rank 0," in wrote[2], "the frames' lines: %r" % wrote)
+
+
 def test_a_failing_rank_stops_the_frames():
     """Rank 1 cannot read its scene: one error line and no frame written by either rank."""
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
@@ -234,6 +248,7 @@ def main():
         ("a failing rank ends all ranks with one message", test_a_failing_rank_ends_all_with_one_message),
         ("walkthrough: whole frames go to ranks, each the one process's", test_whole_frames_go_to_ranks),
         ("walkthrough: fewer frames than ranks are divided", test_fewer_frames_than_ranks_are_divided),
+        ("walkthrough: --frame-step deals every Nth frame to ranks", test_frame_step_deals_every_nth_frame),
         ("walkthrough: a failing rank stops the frames", test_a_failing_rank_stops_the_frames),
         ("walkthrough: Ctrl-C leaves whole frames", test_ctrl_c_leaves_whole_frames),
         ("bad settings are said once", test_bad_settings_are_said_once),
