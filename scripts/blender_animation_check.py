@@ -27,7 +27,7 @@ time n / fps, placed as `render --frames` places them.
    each for STEP, LINEAR and CUBICSPLINE on translation, rotation and scale. Blender's importer
    reads it into an empty scene; each cube's world matrix (turned into glTF's axes) at each frame
    equals raysplat's node matrix, and the cube's corners placed by it bound the triangles raysplat
-   renders at that frame (info's "objects", the file loaded posed). Where Blender's importer
+   renders at that frame (info's "objects", flattened at the pose). Where Blender's importer
    cannot be the answer by definition: LINEAR rotations are its normalized lerp (compared on keys and half-way, and elsewhere with
    mathutils' slerp of the keys), and Blender 4.2's importer drops CUBICSPLINE tangents (its
    keys get automatic handles), so CUBICSPLINE cubes are compared with Blender on the keys and
