@@ -10,6 +10,7 @@ Only the standard library.
 
 import argparse
 import json
+import os
 import struct
 import sys
 
@@ -28,12 +29,27 @@ def read(path):
 
 
 def write_glb(path, doc, binary):
+    """doc and its one buffer's bytes as a .glb at path, written whole or not at all."""
     text = json.dumps(doc, separators=(",", ":")).encode()
     text += b" " * (-len(text) % 4)
     binary += b"\0" * (-len(binary) % 4)
     chunks = struct.pack("<I", len(text)) + b"JSON" + text + struct.pack("<I", len(binary)) + b"BIN\0" + binary
-    with open(path, "wb") as f:
+    with open(path + ".tmp", "wb") as f:
         f.write(b"glTF" + struct.pack("<II", 2, 12 + len(chunks)) + chunks)
+    os.replace(path + ".tmp", path)
+
+
+def add_floats(doc, binary, values, count, kind):
+    """Appends float32 values to the bytearray binary (buffer 0) as a new accessor of count
+    elements of kind; returns its index."""
+    view = len(doc.setdefault("bufferViews", []))
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": 4 * len(values)})
+    binary.extend(struct.pack("<%df" % len(values), *values))
+    acc = {"bufferView": view, "componentType": 5126, "count": count, "type": kind}
+    if kind == "SCALAR":
+        acc["min"], acc["max"] = [min(values)], [max(values)]
+    doc.setdefault("accessors", []).append(acc)
+    return len(doc["accessors"]) - 1
 
 
 def main():
@@ -50,21 +66,9 @@ def main():
     missing = [n for n in a.nodes if n not in names]
     if missing:
         sys.exit("animate_node.py: no node named %s in %s" % (", ".join(missing), a.input))
-    buffer_index = 0
     binary = bytearray(binary + b"\0" * (-len(binary) % 4))
-
-    def accessor(values, count, kind):
-        view = len(doc.setdefault("bufferViews", []))
-        doc["bufferViews"].append({"buffer": buffer_index, "byteOffset": len(binary), "byteLength": 4 * len(values)})
-        binary.extend(struct.pack("<%df" % len(values), *values))
-        acc = {"bufferView": view, "componentType": 5126, "count": count, "type": kind}
-        if kind == "SCALAR":
-            acc["min"], acc["max"] = [min(values)], [max(values)]
-        doc.setdefault("accessors", []).append(acc)
-        return len(doc["accessors"]) - 1
-
     times = [f / a.fps for f in range(a.frames + 1)]
-    time_accessor = accessor(times, len(times), "SCALAR")
+    time_accessor = add_floats(doc, binary, times, len(times), "SCALAR")
     samplers, channels = [], []
     for name in a.nodes:
         node = doc["nodes"][names[name]]
@@ -72,10 +76,10 @@ def main():
             sys.exit("animate_node.py: node %s has a matrix, not TRS" % name)
         t0 = node.get("translation", [0.0, 0.0, 0.0])
         keys = [c for f in range(a.frames + 1) for c in (t0[k] + a.offset[k] * f / a.frames for k in range(3))]
-        samplers.append({"input": time_accessor, "output": accessor(keys, a.frames + 1, "VEC3"), "interpolation": "LINEAR"})
+        samplers.append({"input": time_accessor, "output": add_floats(doc, binary, keys, a.frames + 1, "VEC3"), "interpolation": "LINEAR"})
         channels.append({"sampler": len(samplers) - 1, "target": {"node": names[name], "path": "translation"}})
     doc.setdefault("animations", []).append({"name": "slide", "samplers": samplers, "channels": channels})
-    doc["buffers"][buffer_index]["byteLength"] = len(binary)
+    doc["buffers"][0]["byteLength"] = len(binary)
     write_glb(a.output, doc, bytes(binary))
 
 

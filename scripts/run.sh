@@ -7,8 +7,9 @@
 #                           build, run the whole test suite
 #   scripts/run.sh build    install what is missing and build (build/raysplat)
 #   scripts/run.sh study    also install python3-venv and libLLVM 19 (for Mitsuba's LLVM
-#                           variant), build, and run the quality study (scripts/study.py),
-#                           which writes docs/results/ and docs/results.md
+#                           variant), build, and run the quality study (scripts/study.py)
+#                           and the walkthrough study (scripts/walkthrough_study.py), which
+#                           write docs/results/ and docs/results.md
 #   scripts/run.sh sanitize also install clang 14, build build-san/ with AddressSanitizer and
 #                           UndefinedBehaviorSanitizer, and run the test suite there (CI runs
 #                           it after `test`). tests/sanitizers/ubsan.supp lists what is
@@ -84,6 +85,7 @@ case "${1:-}" in
   study)
     install_missing study; build
     python3 scripts/study.py
+    python3 scripts/walkthrough_study.py --readme docs/results.md
     ;;
   sanitize)
     install_missing sanitize

@@ -541,18 +541,6 @@ def results_markdown(results, machine, args, plot_png, pictures):
     return "\n".join(out).rstrip() + "\n"
 
 
-def update_readme(readme, body):
-    text = open(readme, encoding="utf-8").read()
-    if BEGIN not in text or END not in text:
-        sys.exit(f"error: {readme} has no '{BEGIN}' … '{END}' markers for the results")
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    tmp = readme + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as f:
-        f.write(head + BEGIN + "\n" + body + END + tail)
-    os.replace(tmp, readme)
-
-
 def json_safe(x):
     """NaN and infinities (FLIP of a black reference) as null: study.json stays strict JSON."""
     if isinstance(x, float) and not np.isfinite(x):
@@ -616,7 +604,7 @@ def main():
     with open(os.path.join(args.out, "results.md"), "w") as f:
         f.write(body)
     if not args.no_readme:
-        update_readme(args.readme, body)
+        studyutil.replace_section(args.readme, BEGIN, END, body)
         log(f"updated {os.path.relpath(args.readme, studyutil.ROOT)}")
     for name, s in summary.items():
         log(f"{name}: {s['verdict']}")

@@ -131,3 +131,16 @@ def crop(img, rect):
 
 def upscale(img8, factor):
     return np.repeat(np.repeat(img8, factor, axis=0), factor, axis=1)
+
+
+def replace_section(path, begin, end, body):
+    """Rewrite what lies between the markers begin and end in the page at path."""
+    text = open(path, encoding="utf-8").read()
+    if begin not in text or end not in text:
+        sys.exit(f"error: {path} has no '{begin}' … '{end}' markers")
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(head + begin + "\n" + body + end + tail)
+    os.replace(tmp, path)
