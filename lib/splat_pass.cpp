@@ -246,12 +246,20 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonSto
     // for. Otherwise the tree indexes the eye samples over an empty grid of the same geometry:
     // nothing occludes in it, and the receiver rules alone decide (--visibility rays), or nothing
     // does (splat-novis).
+    // A walkthrough's frames share the first frame's.
     const bool mask = c.cfg.needsMask();
-    grid_ = mask || !c.cfg.vdb.empty() || !c.cfg.cacheDir.empty()
-                ? buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, c.stats, outputs)
-                : OcclusionGrid(gridForBounds(c.scene.bounds, c.cfg.grid));
-    if (!mask) grid_ = OcclusionGrid(grid_.geometry);
-    photons_ = photonSettings(c.cfg, grid_.geometry.voxelSize);
+    c.stats.setCount("grid_reused", store && store->grid ? 1 : 0);
+    if (store && store->grid) {
+        grid_ = store->grid;
+    } else {
+        OcclusionGrid grid = mask || !c.cfg.vdb.empty() || !c.cfg.cacheDir.empty()
+                                 ? buildGrid(c.scene, c.cfg.gridSettings(), c.pool, c.reporter, c.stats, outputs)
+                                 : OcclusionGrid(gridForBounds(c.scene.bounds, c.cfg.grid));
+        if (!mask) grid = OcclusionGrid(grid.geometry);
+        grid_ = std::make_shared<const OcclusionGrid>(std::move(grid));
+        if (store) store->grid = grid_;
+    }
+    photons_ = photonSettings(c.cfg, grid_->geometry.voxelSize);
     // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
     // photons that reach an eye sample (docs/design.md §8); stored photons have theirs already.
     splat_.coverage = measuresCoverage_ && !store ? &coverage_ : nullptr;
@@ -275,7 +283,7 @@ EyePass SplatPasses::traceEye(int pass) {
 float SplatPasses::receiverSpacing(int pass) const {
     if (!sparse_) return 0.f;
     const float scale = probing_ && pass == 0 ? 0.5f : photons_.classScale[kPhotonIndirect];
-    return c_.cfg.receiverSpacing * photons_.minRadius[kPhotonIndirect] * grid_.geometry.voxelSize *
+    return c_.cfg.receiverSpacing * photons_.minRadius[kPhotonIndirect] * grid_->geometry.voxelSize *
            passRadiusScale(pass, c_.cfg.alpha) * scale;
 }
 
@@ -326,7 +334,7 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
     EyePass eye = traceEye(pass);
     Timer trees;
     OcclusionTreeStats ts;
-    PassTargets targets(c_.accel, grid_, eye.samples, c_.width, c_.height, receiverSpacing(pass), c_.pool, c_.reporter,
+    PassTargets targets(c_.accel, *grid_, eye.samples, c_.width, c_.height, receiverSpacing(pass), c_.pool, c_.reporter,
                         c_.ranks, &ts);
     c_.stats.addTime("tree", trees.seconds());
     c_.stats.setCount("receivers", double(targets.receivers()));
@@ -399,7 +407,7 @@ void SplatPasses::replayRay(PhotonMap& photons, const PhotonSettings& passSettin
     CoverageStats unused;
     coverage_.pass = uint64_t(c_.cfg.replayPass);
     if (measuresCoverage_) normalizeCoverage(c_.accel, covered, coverage_, unused);
-    reportReplayed(c_, traced, covered, grid_.geometry.voxelSize);
+    reportReplayed(c_, traced, covered, grid_->geometry.voxelSize);
 }
 
 void SplatPasses::replay(FixedFilm& sum) {

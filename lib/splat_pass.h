@@ -27,6 +27,8 @@ class PassTargets;
 // frame's image is the same whether its photons were traced for it or for a frame before it.
 struct PhotonStore {
     std::map<int, PhotonMap> passes;  // by pass
+    // The occlusion grid (or its empty twin) the first frame built: it depends on the scene alone.
+    std::shared_ptr<const OcclusionGrid> grid;
     int64_t traced = 0;               // passes traced (the rest of the frames' passes reused them)
     double bytes() const {
         double b = 0.0;
@@ -76,7 +78,7 @@ private:
 
     const RenderContext& c_;
     PhotonStore* store_;
-    OcclusionGrid grid_;
+    std::shared_ptr<const OcclusionGrid> grid_;  // the store's where there is one
     EyePassSettings eye_;
     PhotonSettings photons_;
     CoverageSettings coverage_;

@@ -258,13 +258,15 @@ bool sameFilm(const Film& a, const Film& b) {
 }
 
 TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
-    // Whether only the camera moves (the scene loaded once, the BVH and the photons kept) or a
-    // mesh rides on the rig (each frame loaded as posed), frame f is bit for bit the still of the
-    // file posed at f / fps; the frames differ from each other.
-    for (bool meshChild : {false, true}) {
+    // Whether only the camera moves (the scene loaded once, the BVH, the occlusion grid and the
+    // photons kept) or a mesh rides on the rig (each frame loaded as posed), frame f is bit for
+    // bit the still of the file posed at f / fps; the frames differ from each other. The paper's
+    // visibility (the grid's mask) too, where the grid is built for the first frame alone.
+    for (const auto& [meshChild, mask] : {std::pair{false, false}, std::pair{true, false}, std::pair{false, true}}) {
         TempDir dir;
         const std::string path = writeRigScene(dir, meshChild);
-        const RenderConfig cfg = walkConfig(path, dir, 6, 12);
+        RenderConfig cfg = walkConfig(path, dir, 6, 12);
+        if (mask) cfg.visibility = Visibility::Mask;
         Walkthrough walk(cfg, silentReporter(), singleProcess());
         EXPECT_EQ(walk.movesOnlyCameras(), !meshChild);
         RenderConfig still = cfg;
@@ -282,6 +284,10 @@ TEST(Walkthrough, EachFrameIsTheStillOfItsPosedScene) {
             EXPECT_EQ(r.stats.count("scene_reads"), frame == 6 ? 1.0 : 0.0);
             EXPECT_EQ(r.stats.count("bvh_reused"), meshChild || frame == 6 ? 0.0 : 1.0);
             EXPECT_EQ(r.stats.count("photon_passes_traced"), meshChild || frame == 6 ? 1.0 : 0.0);
+            EXPECT_EQ(r.stats.count("grid_reused"), meshChild || frame == 6 ? 0.0 : 1.0);
+            if (mask) {
+                EXPECT_EQ(r.stats.time("voxelize") > 0.0, frame == 6) << "the grid built for frame 6 alone";
+            }
             frames.push_back(std::move(r.film));
         }
         EXPECT_FALSE(sameFilm(frames[0], frames[1]));
