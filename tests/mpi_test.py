@@ -75,12 +75,14 @@ def test_time_limit_ranks_agree_on_the_passes():
     cli.check(shared % 2 == 1, "2 ranks measuring the kernel scale rendered %d passes: 1 + whole rounds of 2 expected" % shared)
 
 
-def test_a_failing_rank_ends_all_with_one_message():
-    """Rank 1 is given a scene that does not exist (mpirun's MPMD form): no output, one line."""
+def check_rank_without_its_scene(scene, output, *args):
+    """Rank 0 renders scene, rank 1 a scene that does not exist (mpirun's MPMD form), both to
+    output (a name in the temporary folder) with args: one error line naming the missing file,
+    a non-zero exit and no file left."""
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
-        exr = os.path.join(out, "x.exr")
-        good = ["render", cli.CORNELL, "-o", exr, *SMALL]
-        bad = ["render", os.path.join(out, "missing.gltf"), "-o", exr, *SMALL]
+        target = os.path.join(out, output)
+        good = ["render", scene, "-o", target, *args, *SMALL]
+        bad = ["render", os.path.join(out, "missing.gltf"), "-o", target, *args, *SMALL]
         r = mpirun(1, RAYSPLAT, *good, ":", "-np", "1", RAYSPLAT, *bad)
         leftover = os.listdir(out)
     errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
@@ -88,6 +90,11 @@ def test_a_failing_rank_ends_all_with_one_message():
     cli.check(errors == ["raysplat: error: %s: no such file" % os.path.join(out, "missing.gltf")],
               "expected one error line naming the file, got %r" % errors)
     cli.check(leftover == [], "files left behind: %r" % leftover)
+
+
+def test_a_failing_rank_ends_all_with_one_message():
+    """Rank 1 is given a scene that does not exist: no output, one line."""
+    check_rank_without_its_scene(cli.CORNELL, "x.exr")
 
 
 def test_ctrl_c_stops_every_rank_cleanly():
@@ -184,17 +191,7 @@ def test_frame_step_deals_every_nth_frame():
 
 def test_a_failing_rank_stops_the_frames():
     """Rank 1 cannot read its scene: one error line and no frame written by either rank."""
-    with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
-        pattern = os.path.join(out, "w_####.exr")
-        good = ["render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o", pattern, "--frames", "1-4", *SMALL]
-        bad = ["render", os.path.join(out, "missing.gltf"), "-o", pattern, "--frames", "1-4", *SMALL]
-        r = mpirun(1, RAYSPLAT, *good, ":", "-np", "1", RAYSPLAT, *bad)
-        leftover = os.listdir(out)
-    errors = [line for line in r.stderr.splitlines() if line.startswith("raysplat")]
-    cli.check(r.returncode != 0, "mpirun exited 0")
-    cli.check(errors == ["raysplat: error: %s: no such file" % os.path.join(out, "missing.gltf")],
-              "expected one error line naming the file, got %r" % errors)
-    cli.check(leftover == [], "files left behind: %r" % leftover)
+    check_rank_without_its_scene(os.path.join(cli.DATA, "interior_walk.gltf"), "w_####.exr", "--frames", "1-4")
 
 
 def test_ctrl_c_leaves_whole_frames():
