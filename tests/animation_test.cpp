@@ -102,18 +102,31 @@ std::string join(const std::vector<std::string>& parts) {
 
 std::string floats(const std::vector<float>& v) { return std::string(reinterpret_cast<const char*>(v.data()), v.size() * 4); }
 
-// A rig (animated: translation (0,0,0) → (2,0,0) and rotation 0 → 90 degrees about +Y over one
-// second, LINEAR) with two children 1 m along its +Z: a camera, and (with `meshChild`) a triangle.
-std::string writeRigScene(const TempDir& dir, bool meshChild) {
+// A glTF buffer of float accessors, written beside the file that names it.
+struct FloatBuffer {
     std::string bin;
     std::vector<std::string> views, accessors;
-    auto add = [&](const std::string& bytes, int count, const char* type) {
+    // An accessor of `count` elements of `type` over `bytes`; its index as text.
+    std::string add(const std::string& bytes, int count, const char* type) {
         views.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
         bin += bytes;
         accessors.push_back("{\"bufferView\":" + std::to_string(views.size() - 1) + ",\"componentType\":5126,\"count\":" +
                             std::to_string(count) + ",\"type\":\"" + type + "\"}");
         return std::to_string(accessors.size() - 1);
-    };
+    }
+    // The document's accessors, views and buffer members, the buffer in file `bin` of `dir`.
+    std::string json(const TempDir& dir, const std::string& binName) const {
+        std::ofstream(dir.file(binName), std::ios::binary) << bin;
+        return "\"accessors\":[" + join(accessors) + "],\"bufferViews\":[" + join(views) + "],"
+               "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"" + binName + "\"}]";
+    }
+};
+
+// A rig (animated: translation (0,0,0) → (2,0,0) and rotation 0 → 90 degrees about +Y over one
+// second, LINEAR) with two children 1 m along its +Z: a camera, and (with `meshChild`) a triangle.
+std::string writeRigScene(const TempDir& dir, bool meshChild) {
+    FloatBuffer buffer;
+    auto add = [&](const std::string& bytes, int count, const char* type) { return buffer.add(bytes, count, type); };
     const float h = std::sqrt(0.5f);
     const std::string tri = add(floats({0, 0, 0, 1, 0, 0, 0, 1, 0}), 3, "VEC3");
     const std::string times = add(floats({0.f, 1.f}), 2, "SCALAR");
@@ -133,9 +146,7 @@ std::string writeRigScene(const TempDir& dir, bool meshChild) {
                       "{\"input\":" + times + ",\"output\":" + turns + "}],\"channels\":["
                       "{\"sampler\":0,\"target\":{\"node\":0,\"path\":\"translation\"}},"
                       "{\"sampler\":1,\"target\":{\"node\":0,\"path\":\"rotation\"}}]}],"
-                      "\"accessors\":[" + join(accessors) + "],\"bufferViews\":[" + join(views) + "],"
-                      "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"rig.bin\"}]}";
-    std::ofstream(dir.file("rig.bin"), std::ios::binary) << bin;
+                      + buffer.json(dir, "rig.bin") + "}";
     std::ofstream(dir.file("rig.gltf"), std::ios::binary) << doc;
     return dir.file("rig.gltf");
 }
@@ -305,15 +316,8 @@ const Vec3 kHinge(0.5f, 0.f, 0.6f), kLamp(0.f, 3.f, 0.f);
 const Vec3 kDoor[4] = {{0.f, 0.2f, 0.f}, {1.f, 0.2f, 0.f}, {1.f, 2.f, 0.f}, {0.f, 2.f, 0.f}};  // about the hinge
 
 std::string writeDoorScene(const TempDir& dir) {
-    std::string bin;
-    std::vector<std::string> views, accessors;
-    auto add = [&](const std::string& bytes, int count, const char* type) {
-        views.push_back("{\"buffer\":0,\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteLength\":" + std::to_string(bytes.size()) + "}");
-        bin += bytes;
-        accessors.push_back("{\"bufferView\":" + std::to_string(views.size() - 1) + ",\"componentType\":5126,\"count\":" +
-                            std::to_string(count) + ",\"type\":\"" + type + "\"}");
-        return std::to_string(accessors.size() - 1);
-    };
+    FloatBuffer buffer;
+    auto add = [&](const std::string& bytes, int count, const char* type) { return buffer.add(bytes, count, type); };
     const std::string floor = add(floats({-3, 0, -3, -3, 0, 3, 3, 0, 3, -3, 0, -3, 3, 0, 3, 3, 0, -3}), 6, "VEC3");
     std::vector<float> door;
     for (int k : {0, 1, 2, 0, 2, 3}) door.insert(door.end(), {kDoor[k].x, kDoor[k].y, kDoor[k].z});
@@ -339,9 +343,7 @@ std::string writeDoorScene(const TempDir& dir) {
         "{\"primitives\":[{\"attributes\":{\"POSITION\":" + doorMesh + "},\"material\":1}]}],"
         "\"animations\":[{\"name\":\"swing\",\"samplers\":[{\"input\":" + times + ",\"output\":" + turns + "}],"
         "\"channels\":[{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"rotation\"}}]}],"
-        "\"accessors\":[" + join(accessors) + "],\"bufferViews\":[" + join(views) + "],"
-        "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"door.bin\"}]}";
-    std::ofstream(dir.file("door.bin"), std::ios::binary) << bin;
+        + buffer.json(dir, "door.bin") + "}";
     std::ofstream(dir.file("door.gltf"), std::ios::binary) << doc;
     return dir.file("door.gltf");
 }
