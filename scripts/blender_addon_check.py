@@ -28,7 +28,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from blender_check import FAIL, SKIP, Checks, exit_without_teardown, reexec_under_bpy_python, world_bounds_of_meshes  # noqa: E402
+from blender_check import FAIL, begin_check, exit_without_teardown, reexec_under_bpy_python, world_bounds_of_meshes  # noqa: E402
 from addon_zip import make_zip  # noqa: E402
 
 W, H = 64, 48
@@ -228,19 +228,12 @@ def check_animation(bpy, c, scene, binary, work):
 
 def main():
     reexec_under_bpy_python(__file__)
-    required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
-    try:
-        import bpy
-        import numpy as np
-    except Exception as e:
-        say(f"{'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e})")
-        return FAIL if required else SKIP
-    binary = os.environ.get("RAYSPLAT")
-    if not binary:
-        say("FAIL: set $RAYSPLAT to the raysplat binary")
-        return FAIL
-    c = Checks()
-    work = Path(tempfile.mkdtemp(prefix="addon-check-"))
+    begun = begin_check("blender_addon_check")
+    if isinstance(begun, int):
+        return begun
+    bpy, binary, c, work = begun
+    import numpy as np
+
     # Install from the zip, as a user does; the user folder is a temporary one.
     os.environ["BLENDER_USER_SCRIPTS"] = str(work / "scripts")
     zip_path = make_zip(work / "raysplat_addon.zip")

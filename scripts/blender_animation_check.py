@@ -48,11 +48,10 @@ import shutil
 import struct
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from blender_check import FAIL, SKIP, Checks, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
+from blender_check import begin_check, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
 
 TOL = 1e-5
 FPS = 24
@@ -425,18 +424,10 @@ def check_addon_export(bpy, c, binary, work):
 
 def main():
     reexec_under_bpy_python(__file__)
-    required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
-    try:
-        import bpy
-    except Exception as e:
-        say(f"{'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e})")
-        return FAIL if required else SKIP
-    binary = os.environ.get("RAYSPLAT")
-    if not binary:
-        say("FAIL: set $RAYSPLAT to the raysplat binary")
-        return FAIL
-    c = Checks()
-    work = Path(tempfile.mkdtemp(prefix="animation-check-"))
+    begun = begin_check("blender_animation_check")
+    if isinstance(begun, int):
+        return begun
+    bpy, binary, c, work = begun
     try:
         check_cameras(bpy, c, binary, work)
         check_interpolation(bpy, c, binary, work)

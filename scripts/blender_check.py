@@ -27,6 +27,7 @@ import argparse
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,6 +66,24 @@ def reexec_under_bpy_python(script=__file__):
     except OSError as e:
         say(f"cannot run {chosen}: {e}")
         sys.exit(FAIL if explicit or os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1" else SKIP)
+
+
+def begin_check(name):
+    """What a check of raysplat through bpy starts with, run under the bpy interpreter: bpy
+    imported (SKIP where it cannot be, FAIL with RAYSPLAT_REQUIRE_BLENDER=1), the binary from
+    $RAYSPLAT, a Checks and a temporary work folder. Returns (bpy, binary, checks, work), or
+    the exit code where the check cannot run."""
+    required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
+    try:
+        import bpy
+    except Exception as e:  # ImportError, or a bpy built for another Python
+        print(f"{name}: {'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e})", flush=True)
+        return FAIL if required else SKIP
+    binary = os.environ.get("RAYSPLAT")
+    if not binary:
+        print(f"{name}: FAIL: set $RAYSPLAT to the raysplat binary", flush=True)
+        return FAIL
+    return bpy, binary, Checks(), Path(tempfile.mkdtemp(prefix=name + "-"))
 
 
 def parse_args():
