@@ -21,6 +21,10 @@
                            (the scene's extras) through a 1 m² window with a
                            blind, the opening marked as a light portal, and a
                            potted plant of alpha-masked leaves in the sun
+  textured_room.gltf + .bin  a closed room whose floor and walls carry normal,
+                           metallic-roughness and base colour textures, an
+                           emissive screen showing an image, a vertex-coloured
+                           ball and alpha-masked leaves (scripts/textured_room.py)
 
 Usage:  python3 scripts/make_scenes.py [outdir]
 
@@ -275,12 +279,15 @@ class GltfBuilder:
             self.extensions.update(ext)
         return self._append("materials", mat)
 
-    def mesh(self, name, geom, material, uvs=None):
+    def mesh(self, name, geom, material, uvs=None, colors=None):
+        """A mesh of one primitive; `colors`: linear RGB a vertex (COLOR_0)."""
         pos, nrm, idx = geom
         prim = {"attributes": {"POSITION": self._vec3_accessor(pos, True),
                                "NORMAL": self._vec3_accessor(nrm, False)},
                 "indices": self._index_accessor(idx, len(pos)),
                 "material": material, "mode": TRIANGLES}
+        if colors is not None:
+            prim["attributes"]["COLOR_0"] = self._vec3_accessor(colors, False)
         if uvs is not None:
             flat = [c + 0.0 for uv in uvs for c in uv]
             data = struct.pack("<%df" % len(flat), *flat)
@@ -987,13 +994,15 @@ def daylight(outdir):
 
 
 def main(argv):
+    import textured_room
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     outdir = argv[1] if len(argv) > 1 else os.path.join(repo, "data")
     os.makedirs(outdir, exist_ok=True)
     for build in (cornell_box, glossy_box, direct_light,
                   lambda d: two_rooms(d, gap=False),
                   lambda d: two_rooms(d, gap=True), caustic_pool, point_shadows,
-                  interior, interior_walk, daylight):
+                  interior, interior_walk, daylight,
+                  lambda d: textured_room.textured_room(os.path.join(d, "textured_room.gltf"))):
         g = build(outdir)
         tris = sum(g.doc["accessors"][p["indices"]]["count"] // 3
                    for n in g.doc["nodes"] if "mesh" in n
