@@ -58,7 +58,7 @@ TEST(EyePass, DiffuseWallGetsSSamplesPerPixelOnItsSurface) {
     for (size_t i = 0; i < eye.samples.size(); ++i) {
         EXPECT_NEAR(eye.samples.position[i].z, -1.f, 1e-5f);
         // Lambert: weight 1/S × ρ/π for any light direction, to 2^-9.
-        const Vec3 f = eye.samples.weightedF(i, Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, 0.1f, 1.f)), 0.95f);
+        const Vec3 f = eye.samples.weightedF(i, Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, 0.1f, 1.f)), 0.95f, 1.f);
         EXPECT_NEAR(f.x, 0.25f * 0.5f * kInvPi, 0.25f * 0.5f * kInvPi / 512.f);
         EXPECT_EQ(decodeUnit16(eye.samples.normal[i]), Vec3(0, 0, 1)) << "axis-aligned normals are exact";
         EXPECT_EQ(decodeUnit16(eye.samples.geomNormal[i]), Vec3(0, 0, 1));
@@ -97,7 +97,7 @@ TEST(EyePass, GlossySamplesReproduceTheirBsdf) {
             for (Vec3 wi : {Vec3(0.2f, 0.1f, 1.f), Vec3(-0.5f, 0.3f, 0.4f), Vec3(0.9f, -0.2f, 0.1f)}) {
                 wi = glm::normalize(wi);
                 const Vec3 want = 0.5f * bsdf.eval(wo, wi);  // weight 1/S
-                const Vec3 got = eye.samples.weightedF(i, decodeUnit16(eye.samples.normal[i]), wi, wi.z);
+                const Vec3 got = eye.samples.weightedF(i, decodeUnit16(eye.samples.normal[i]), wi, wi.z, 1.f);
                 for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 0.01f * maxComponent(want)) << i;
             }
         }
@@ -152,7 +152,7 @@ TEST(EyePass, GlassSlabPassesTheFresnelFractionWithUnitWeight) {
     for (size_t i = 0; i < eye.samples.size(); ++i) {
         EXPECT_NEAR(eye.samples.position[i].z, -3.f, 1e-4f);
         // The stored f is weight × ρ/π, ρ = 0.5.
-        const float w = eye.samples.weightedF(i, Vec3(0, 0, 1), Vec3(0, 0, 1), 1.f).x / (0.5f * kInvPi);
+        const float w = eye.samples.weightedF(i, Vec3(0, 0, 1), Vec3(0, 0, 1), 1.f, 1.f).x / (0.5f * kInvPi);
         EXPECT_NEAR(w, 0.25f, 0.25f / 256.f);
         weight += w;
     }

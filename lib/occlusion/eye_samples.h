@@ -73,11 +73,11 @@ struct EyeSamples {
     static uint32_t lobeIndex(uint32_t bsdf) { return bsdf & ((1u << 27) - 1u); }
 
     // weight × f_r(wi, to the viewer) of sample i for light leaving along the unit direction
-    // wi, given its decoded shading normal n and cosI = n·wi > 0 (bsdf.h's eval, from the
-    // stored parts).
-    Vec3 weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI) const;
+    // wi, given its decoded shading normal n, cosI = n·wi > 0 and the diffuse lobe's
+    // bumpShadowing (bsdf.h's eval, from the stored parts).
+    Vec3 weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const;
     // weightedF of a glossy sample, given its `bsdf` word.
-    Vec3 glossyF(uint32_t bsdf, const Vec3& n, const Vec3& wi, float cosI) const;
+    Vec3 glossyF(uint32_t bsdf, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const;
 
     // diffuse: weight × the Lambert f; lobe: the glossy part, if any (its diffuse is set here).
     void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, uint32_t pixel, const Vec3& diffuse,

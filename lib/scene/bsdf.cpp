@@ -86,7 +86,7 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
         case MaterialKind::Mix:
             hasGgx_ = true;
             diffuseWeight_ = 1.f - mr.x;
-            f0_ = glm::mix(Vec3(0.04f), albedo_, mr.x);
+            f0_ = glm::mix(Vec3(kDielectricF0), albedo_, mr.x);
             break;
         case MaterialKind::Mirror: f0_ = albedo_; break;
         case MaterialKind::Glass: break;
@@ -106,11 +106,11 @@ Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
     if (glm::dot(wiW, ng_) <= 0.f) return Vec3(0.f);  // opaque: no light from behind
     Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
     if (wo.z <= 0.f || wi.z <= 0.f) return Vec3(0.f);
-    Vec3 f = diffuseWeight_ * albedo_ * kInvPi;
+    Vec3 f = diffuseWeight_ * albedo_ * kInvPi * bumpShadowing(ng_, frame_.n, wiW);
     if (hasGgx_) {
         Vec3 h = glm::normalize(wo + wi);
         GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);
-        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
+        f = f * diffuseTransmittance(r.m5) + (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
     }
     return f;
 }

@@ -58,6 +58,25 @@ struct GgxReflection {
     float dg = 0.f;  // D(h)·G(wo, wi) / (4 cosθo cosθi)
     float m5 = 0.f;  // (1 − wo·h)^5
 };
+
+// Fresnel at normal incidence of the mix's dielectric layer (glTF's IOR 1.5).
+constexpr float kDielectricF0 = 0.04f;
+// What the dielectric layer lets through to the diffuse lobe: glTF 2.0's fresnel_mix (Appendix
+// B) weighs the diffuse by 1 − F(wo·h), F Schlick's of f0 = 0.04; m5 as in GgxReflection.
+inline float diffuseTransmittance(float m5) { return 1.f - (kDielectricF0 + (1.f - kDielectricF0) * m5); }
+
+// The diffuse lobe's share of light from wi on a surface whose shading normal ns leans from its
+// geometric normal ng (normal maps): the shadowing of Chiang, Li & Burley 2019, "Taming the
+// Shadow Terminator", g = (ng·wi) / ((ns·wi)(ng·ns)) in [0, 1], smoothed to −g³ + g² + g. A bumpy
+// surface lit at a grazing angle shadows part of itself; without it a normal map tilted towards
+// the light reflects more than the surface receives. 1 where ns = ng; ng, ns on wi's side.
+inline float bumpShadowing(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
+    if (ns == ng) return 1.f;
+    const float g = glm::dot(ng, wi) / std::max(glm::dot(ns, wi) * glm::dot(ng, ns), 1e-12f);
+    if (g >= 1.f) return 1.f;
+    if (!(g > 0.f)) return 0.f;
+    return g * (1.f + g - g * g);
+}
 GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha);
 
 // Exact dielectric Fresnel reflectance for cosθi (≥ 0) and relative IOR eta = ηt/ηi.

@@ -12,6 +12,7 @@
 #endif
 
 #include "scene/accel.h"
+#include "scene/bsdf.h"
 #include "scene/scene.h"
 #include "core/stats.h"
 #include "core/log.h"
@@ -224,7 +225,7 @@ public:
             return;
         }
         // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
-        const Vec3 f = samples_.weightedF(i, n, -w, -cosTheta);
+        const Vec3 f = samples_.weightedF(i, n, -w, -cosTheta, shadowing(i));
         const float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
         const Vec3 c = f * ray_.flux * scale;
         if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
@@ -283,6 +284,11 @@ private:
 #if defined(__SSE2__)
     void receive4(const uint32_t* index, const float* visibility, int count);
     Lanes4 weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const;
+    // bsdf.h's bumpShadowing of sample i for the photon, 1 where its normals are one.
+    float shadowing(uint32_t i) const {
+        const uint16_t ns = samples_.normal[i], ng = samples_.geomNormal[i];
+        return ns == ng ? 1.f : bumpShadowing(units_[ng], units_[ns], -ray_.dir);
+    }
     void deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& y, const Lanes4& ng, const Lanes4& c);
     uint32_t waiting_[4];  // samples of the sweep waiting for a batch of four
     float waitingV_[4];
@@ -366,6 +372,10 @@ Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lane
     Lanes4 f{_mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(word, nine)), unit),
             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 9), nine)), unit),
             _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(word, 18), nine)), unit)};
+    alignas(16) float share[4] = {1.f, 1.f, 1.f, 1.f};
+    for (uint32_t bits = live; bits; bits &= bits - 1) share[__builtin_ctz(bits)] = shadowing(lane[__builtin_ctz(bits)]);
+    const __m128 shares = _mm_load_ps(share);
+    f = {_mm_mul_ps(f.x, shares), _mm_mul_ps(f.y, shares), _mm_mul_ps(f.z, shares)};
     const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
     if (glossy) {
         alignas(16) float nx[4], ny[4], nz[4], mc[4], fx[4], fy[4], fz[4];
@@ -373,7 +383,7 @@ Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lane
         _mm_store_ps(fx, f.x), _mm_store_ps(fy, f.y), _mm_store_ps(fz, f.z);
         for (uint32_t bits = glossy; bits; bits &= bits - 1) {
             const int k = __builtin_ctz(bits);
-            const Vec3 g = samples_.glossyF(bsdf[lane[k]], Vec3(nx[k], ny[k], nz[k]), -ray_.dir, mc[k]);
+            const Vec3 g = samples_.glossyF(bsdf[lane[k]], Vec3(nx[k], ny[k], nz[k]), -ray_.dir, mc[k], share[k]);
             fx[k] = g.x, fy[k] = g.y, fz[k] = g.z;
         }
         f = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
