@@ -34,7 +34,9 @@ the principled BSDF uses the separable Smith masking term where raysplat uses th
 height-correlated one, and its diffuse lobe for the mix is Disney's, not Lambert's;
 Mitsuba's conductor "none" reflects a constant F0 where raysplat's mirror uses Schlick.
 A base colour texture is converted for diffuse materials whose factor is white; other
-textured materials keep their factor and the converter says so.
+textured materials keep their factor and the converter says so, as it does for normal,
+emissive and metallic-roughness textures, which it leaves out (data/textured_room.gltf, whose
+maps Blender's Cycles checks instead: scripts/blender_cycles_check.py), and COLOR_0.
 """
 
 import argparse
@@ -211,6 +213,9 @@ def material_xml(mat, name, texture_file=None, opacity_file=None):
     textured = texture_file is not None and metallic <= 0.0 and roughness >= 1.0 and all(v == 1 for v in base[:3])
     if "baseColorTexture" in pbr and not textured:
         print(f"warning: {name}: baseColorTexture not converted, baseColorFactor used", file=sys.stderr)
+    for slot in ("normalTexture", "emissiveTexture", "metallicRoughnessTexture"):
+        if slot in mat or slot in pbr:
+            print(f"warning: {name}: {slot} not converted (the Mitsuba scene leaves it out)", file=sys.stderr)
     transmission = ext_number(mat, "KHR_materials_transmission", "transmissionFactor", 0.0)
     ior = ext_number(mat, "KHR_materials_ior", "ior", 1.5)
     if transmission >= 0.5:
@@ -338,6 +343,8 @@ def convert(scene_path, outdir, width=256, height=256, spp=256, camera_name=None
         flip = np.linalg.det(world[:3, :3]) < 0
         for pi, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"]):
             name = f"{node_name} mesh {node['mesh']} primitive {pi}"
+            if "COLOR_0" in prim["attributes"]:
+                print(f"warning: {name}: COLOR_0 not converted (white)", file=sys.stderr)
             pos = read_accessor(doc, buffers, prim["attributes"]["POSITION"]).astype(np.float64)
             if not np.isfinite(pos).all():
                 raise GltfError(f"{scene_path}: {name} has a non-finite vertex")

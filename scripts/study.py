@@ -59,12 +59,13 @@ BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 # shadows, the caustic under the glossy box's glass sphere, the light through the opening
 # and on the floor of two_rooms_gap (the same region of the black two_rooms_sealed), the
 # caustics on caustic_pool's floor, point_shadows' hard shadows, the interior's banister and
-# the daylight room's window, plant and sun stripes.
+# the daylight room's window, plant and sun stripes, and textured_room's screen, leaves and
+# their shadow on the bevelled floor.
 CROPS = {"cornell_box": (16, 120, 128, 128), "glossy_box": (24, 136, 112, 112),
          "direct_light": (20, 48, 112, 112), "two_rooms_gap": (8, 80, 128, 128),
          "two_rooms_sealed": (8, 80, 128, 128), "caustic_pool": (64, 96, 128, 128),
          "point_shadows": (24, 40, 128, 128), "interior": (112, 96, 128, 128),
-         "daylight": (48, 40, 144, 144)}
+         "daylight": (48, 40, 144, 144), "textured_room": (40, 70, 128, 128)}
 DEFAULT_PASSES = 8  # raysplat's default --passes: the run whose layers and bias are shown
 PAPER = ["--direct", "photons", "--passes", 1]  # the paper's estimator (its split is then the default)
 LAYER_NAMES = ("direct", "indirect", "caustic", "beauty")
