@@ -174,7 +174,17 @@ BsdfSample Bsdf::sample(const Vec3& woW, float uLobe, Vec2 u, Transport mode) co
     s.wi = frame_.toWorld(wi);
     s.pdf = pdf(woW, s.wi);
     if (s.pdf <= 0.f) return s;
-    s.weight = eval(woW, s.wi) * (std::abs(glm::dot(s.wi, frame_.n)) / s.pdf);
+    if (mode == Transport::Radiance) {
+        s.weight = eval(woW, s.wi) * (std::abs(glm::dot(s.wi, frame_.n)) / s.pdf);
+        return s;
+    }
+    // A photon: woW is where its light comes from (eval's wi), and its flux arrives and leaves
+    // per geometric area: f · |woW·ns| |wi·ng| / |woW·ng| / pdf (Veach 1997 §5.3, the adjoint
+    // BSDF under a shading normal), which the camera's paths see as f · |wi·ns| / pdf.
+    const float cosInGeometric = std::abs(glm::dot(woW, ng_));
+    if (!(cosInGeometric > 0.f)) return s;
+    s.weight = eval(s.wi, woW) * (std::abs(glm::dot(woW, frame_.n)) * std::abs(glm::dot(s.wi, ng_)) /
+                                  (cosInGeometric * s.pdf));
     return s;
 }
 
