@@ -14,9 +14,11 @@ BLOCK_BIAS². The bias is what the two models of the same glTF material differ b
 Principled BSDF layers its dielectric specular over the diffuse by albedo scaling and its GGX
 scatters multiply; raysplat follows glTF's fresnel_mix with single-scattering GGX), and the
 splat's own bias against raysplat's path tracer. Measured on textured_room at 128×96, 64
-samples a half: means 1.2 % apart, blocks 4 % RMS apart (noise 1.4 %): the path tracer's
-blocks are 3 % from Cycles', 2–3 % brighter on the glossy floor and under the ceiling, so
-the block check is not yet "within noise".
+samples a half: means 1.9–2.8 % apart a channel (raysplat brighter), blocks 3.4 % RMS apart
+against 1.7 % noise (ratio 3.9), most of it on the glossy, normal-mapped floor; raysplat's
+path tracer is as far from Cycles, and the splat's blocks are within 1.6 × noise of the path
+tracer's. So the block check is not "within noise": it bounds the difference the two models
+make, BLOCK_BIAS.
 
 Cycles is set up as raysplat renders: the glTF camera at the image size, a box pixel filter of
 one pixel, every bounce up to raysplat's 32 path vertices, no clamping, no glossy filter, no
@@ -31,7 +33,9 @@ raysplat does (docs/usage.md's feature table):
 - a material of metallic 0, roughness 1 and no metallic-roughness texture is Lambert in
   raysplat: its Principled BSDF gets a Specular IOR Level of 0 (no specular layer).
 Everything else is the importer's Principled BSDF as it makes it: the dielectric specular of
-F0 = 0.04 under the diffuse, metals, normal maps (tangents by MikkTSpace, green up), the
+F0 = 0.04 under the diffuse, metals, normal maps (tangents by MikkTSpace, green up; Cycles
+shades a bump-mapped diffuse closure with a bump shadowing term, raysplat with Chiang et al.'s
+2019 one, docs/design.md §3), the
 emissive texture and strength, COLOR_0 times the base colour, alpha MASK by a math node.
 
 Exit status: 0 PASS, 1 FAIL, 77 skipped (bpy cannot be imported; with
@@ -51,7 +55,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from blender_check import FAIL, ROOT, SKIP, Checks, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
 
 MEAN_TOLERANCE = 0.03
-BLOCK_BIAS = 0.05  # RMS relative difference of the block means allowed besides noise (docstring)
+BLOCK_BIAS = 0.04  # RMS relative difference of the block means allowed besides noise (docstring)
 MAX_VERTICES = 32  # raysplat's --max-depth default: its longest path
 SEEDS = (1, 2)
 
