@@ -29,11 +29,11 @@ EyeSamples stripSamples(int width, int perPixel, float albedo) {
             const float t = (float(x) + u(rng)) / float(width);
             if (t > 0.75f) {
                 const Vec3 n(-1.f, 0.f, 0.f);
-                s.add(Vec3(1.f, (t - 0.75f) * 4.f, 0.5f * u(rng)), n, n, uint32_t(x), Vec3(albedo));
+                s.add(Vec3(1.f, (t - 0.75f) * 4.f, 0.5f * u(rng)), n, n, false, uint32_t(x), Vec3(albedo));
             } else {
                 const Vec3 n(0.f, 1.f, 0.f);
                 const float x0 = t / 0.75f;
-                s.add(Vec3(x0, x0 > 0.4f && x0 < 0.6f ? 0.01f : 0.f, 0.5f * u(rng)), n, n, uint32_t(x), Vec3(albedo));
+                s.add(Vec3(x0, x0 > 0.4f && x0 < 0.6f ? 0.01f : 0.f, 0.5f * u(rng)), n, n, false, uint32_t(x), Vec3(albedo));
             }
         }
     return s;

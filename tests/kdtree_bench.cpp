@@ -102,7 +102,7 @@ EyeSamples makeSamples(const Surfaces& s) {
     EyeSamples e;
     e.reserve(s.points.size());
     for (size_t i = 0; i < s.points.size(); ++i) {
-        e.add(s.grid.geometry.worldFromVoxel(s.points[i]), s.normals[i], s.normals[i], uint32_t(i / 4), Vec3(0.25f));
+        e.add(s.grid.geometry.worldFromVoxel(s.points[i]), s.normals[i], s.normals[i], false, uint32_t(i / 4), Vec3(0.25f));
     }
     return e;
 }

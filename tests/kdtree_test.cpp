@@ -29,7 +29,7 @@ GridGeometry makeGeometry(IVec3 dims, Vec3 origin = Vec3(-1.3f, 0.2f, 2.f), floa
 EyeSamples makeSamples(const GridGeometry& g, const std::vector<Vec3>& pVoxel) {
     EyeSamples s;
     for (size_t i = 0; i < pVoxel.size(); ++i) {
-        s.add(g.worldFromVoxel(pVoxel[i]), Vec3(0, 0, 1), Vec3(0, 0, 1), uint32_t(i), Vec3(1.f));
+        s.add(g.worldFromVoxel(pVoxel[i]), Vec3(0, 0, 1), Vec3(0, 0, 1), false, uint32_t(i), Vec3(1.f));
     }
     return s;
 }

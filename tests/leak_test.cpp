@@ -50,7 +50,7 @@ std::vector<float> splatOne(const WallScene& w, const PhotonRay& ray, const std:
     EyeSamples eye;
     for (size_t i = 0; i < at.size(); ++i) {
         const Vec3 f = w.scene.materials[w.white].baseColor * kInvPi;  // Lambert, weight 1
-        eye.add(at[i].first, at[i].second, at[i].second, uint32_t(i), f);
+        eye.add(at[i].first, at[i].second, at[i].second, false, uint32_t(i), f);
     }
     OcclusionTree tree = buildOcclusionTree(occ, eye, pool);  // reorders eye, pixels stay
     PhotonMap map;

@@ -160,6 +160,31 @@ TEST(NormalMap, GrazingLightIsShadowedAsChiang2019) {
     EXPECT_NEAR(L, expected, 0.02f * expected) << "plain n·l: " << plain;
 }
 
+// The same light on the same patch whose shading normal leans by 30° through its vertex normals,
+// with no normal map: no bump shadowing (as Cycles and Mitsuba shade smooth meshes), the plain
+// albedo/π · E · (ns·l).
+TEST(NormalMap, InterpolatedNormalsAloneAreNotShadowed) {
+    const float albedo = 0.7f, s30 = 0.5f, c30 = std::sqrt(3.f) / 2.f;
+    Scene s;
+    const uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(albedo));
+    addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
+    const Vec3 l = glm::normalize(Vec3(0.95f, 0.2f, 0.f)), ns(s30, c30, 0.f);
+    std::fill(s.normals.begin(), s.normals.end(), ns);
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = -l;
+    sun.intensity = Vec3(3.f);
+    s.lights.push_back(sun);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    LightSampler lights(s);
+    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
+    Sampler sampler(1, Stage::Test, 0);
+    const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+    const float plain = albedo / kPi * 3.f * glm::dot(ns, l);
+    EXPECT_NEAR(L, plain, 1e-3f * plain);
+}
+
 // A photon bouncing off a normal-mapped surface carries flux per geometric area: the mean of
 // Bsdf::sample's Importance weights for light arriving from l is (|ns·l| / |ng·l|) × ∫ f(ωo, l)
 // |ng·ωo| dωo, the flux the camera's radiance f · |ns·l| leaves with (by quadrature over the

@@ -178,7 +178,7 @@ TEST(SplatStage, ClosedRoomReflectsEmittedPowerTimesAlbedo) {
                     else if (axis == 1) p = {a, 1.f + side, b};
                     else p = {a, 1.f + b, side};
                     nrm[axis] = -side;
-                    eye.add(p, nrm, nrm, 0, da * s.materials[wall].baseColor * kInvPi);  // Lambert
+                    eye.add(p, nrm, nrm, false, 0, da * s.materials[wall].baseColor * kInvPi);  // Lambert
                 }
             }
         }

@@ -75,11 +75,12 @@ Vec3 EyeSamples::glossyF(uint32_t r, const Vec3& n, const Vec3& wi, float cosI, 
     return f * diffuseTransmittance(g.m5) + (specular + (weight - specular) * g.m5) * g.dg;
 }
 
-void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, uint32_t px, const Vec3& diffuse,
+void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, bool bent, uint32_t px, const Vec3& diffuse,
                      const GlossyLobe* lobe) {
     position.push_back(p);
     normal.push_back(encodeUnit16(ns));
     geomNormal.push_back(encodeUnit16(ng));
+    bumped.push_back(bent ? 1 : 0);
     pixel.push_back(px);
     if (!lobe) {
         bsdf.push_back(encodeRgb9e5(diffuse));
@@ -91,13 +92,14 @@ void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, uint32_t px,
 }
 
 size_t EyeSamples::bytes() const {
-    return size() * (sizeof(Vec3) + 2 * sizeof(uint16_t) + 2 * sizeof(uint32_t)) + lobes.size() * sizeof(GlossyLobe);
+    return size() * kBytesPerSample + lobes.size() * sizeof(GlossyLobe);
 }
 
 void EyeSamples::reserve(size_t n) {
     position.reserve(n);
     normal.reserve(n);
     geomNormal.reserve(n);
+    bumped.reserve(n);
     pixel.reserve(n);
     bsdf.reserve(n);
 }
@@ -107,6 +109,7 @@ void EyeSamples::append(const EyeSamples& o) {
     position.insert(position.end(), o.position.begin(), o.position.end());
     normal.insert(normal.end(), o.normal.begin(), o.normal.end());
     geomNormal.insert(geomNormal.end(), o.geomNormal.begin(), o.geomNormal.end());
+    bumped.insert(bumped.end(), o.bumped.begin(), o.bumped.end());
     pixel.insert(pixel.end(), o.pixel.begin(), o.pixel.end());
     for (uint32_t r : o.bsdf) bsdf.push_back(isGlossy(r) ? kLobeFlag | (lobeIndex(r) + lobeBase) : r);
     lobes.insert(lobes.end(), o.lobes.begin(), o.lobes.end());
@@ -125,6 +128,7 @@ void EyeSamples::permute(const std::vector<uint32_t>& order, ThreadPool& pool) {
     permuteArray(position, order, pool);
     permuteArray(normal, order, pool);
     permuteArray(geomNormal, order, pool);
+    permuteArray(bumped, order, pool);
     permuteArray(pixel, order, pool);
     permuteArray(bsdf, order, pool);
 }

@@ -54,9 +54,10 @@ struct GlossyLobe {
     float alpha;        // GGX α
 };
 
-// Eye samples, structure of arrays, 24 bytes a sample and a GlossyLobe more for each glossy
+// Eye samples, structure of arrays, 25 bytes a sample and a GlossyLobe more for each glossy
 // one. Sample i: world position, shading normal (the one the BSDF frames, on the viewer's
-// side), geometric normal (turned to the viewer's side), pixel index (y·width + x) and its
+// side), geometric normal (turned to the viewer's side), whether a normal map bent the shading
+// normal (Bsdf::bumped: its diffuse lobe takes bumpShadowing), pixel index (y·width + x) and its
 // BSDF (`bsdf`): for a Lambert sample weight × f as RGB9E5, for a glossy one exponent 31 and
 // the index of its lobe in `lobes`. The weight is 1/S × the throughput of the specular chain
 // that led here. `lobes` is indexed, not reordered by permute.
@@ -64,6 +65,7 @@ struct EyeSamples {
     std::vector<Vec3> position;
     std::vector<uint16_t> normal;      // encodeUnit16
     std::vector<uint16_t> geomNormal;  // encodeUnit16
+    std::vector<uint8_t> bumped;       // 1: a normal map bent `normal`
     std::vector<uint32_t> pixel;
     std::vector<uint32_t> bsdf;
     std::vector<GlossyLobe> lobes;
@@ -80,10 +82,10 @@ struct EyeSamples {
     Vec3 glossyF(uint32_t bsdf, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const;
 
     // diffuse: weight × the Lambert f; lobe: the glossy part, if any (its diffuse is set here).
-    void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, uint32_t pixel, const Vec3& diffuse,
-             const GlossyLobe* lobe = nullptr);
+    void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, bool bumped, uint32_t pixel,
+             const Vec3& diffuse, const GlossyLobe* lobe = nullptr);
     // Bytes a sample, and a glossy one's lobe more.
-    static constexpr size_t kBytesPerSample = sizeof(Vec3) + 2 * sizeof(uint16_t) + 2 * sizeof(uint32_t);
+    static constexpr size_t kBytesPerSample = sizeof(Vec3) + 2 * sizeof(uint16_t) + 1 + 2 * sizeof(uint32_t);
     size_t size() const { return position.size(); }
     size_t bytes() const;
     void reserve(size_t n);

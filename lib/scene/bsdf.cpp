@@ -75,6 +75,7 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
     // A shading normal that puts wo below the surface would make light leak: use ng there.
     if (glm::dot(ns, wo) <= 1e-4f || glm::dot(ns, ng_) <= 0.f) ns = ng_;
     frame_ = Frame(ns);
+    bumped_ = m.normalTexture.present() && ns != ng_;
     eta_ = outside ? m.ior : 1.f / m.ior;
     // Metallic and roughness at the point (the factors × the metallicRoughnessTexture).
     const Vec2 mr = m.metallicRoughnessTexture.present() ? scene.metallicRoughness(sp.material, sp.attr)
@@ -106,7 +107,7 @@ Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
     if (glm::dot(wiW, ng_) <= 0.f) return Vec3(0.f);  // opaque: no light from behind
     Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
     if (wo.z <= 0.f || wi.z <= 0.f) return Vec3(0.f);
-    Vec3 f = diffuseWeight_ * albedo_ * kInvPi * bumpShadowing(ng_, frame_.n, wiW);
+    Vec3 f = diffuseWeight_ * albedo_ * kInvPi * (bumped_ ? bumpShadowing(ng_, frame_.n, wiW) : 1.f);
     if (hasGgx_) {
         Vec3 h = glm::normalize(wo + wi);
         GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);

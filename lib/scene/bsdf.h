@@ -37,6 +37,9 @@ public:
     Vec3 fresnelAtNormal() const { return f0_; }
     float ggxAlpha() const { return alpha_; }
     const Vec3& shadingNormal() const { return frame_.n; }
+    // Whether a normal map bends the shading normal: only then does the diffuse lobe take
+    // bumpShadowing (interpolated normals alone do not, as in Cycles and Mitsuba).
+    bool bumped() const { return bumped_; }
 
 private:
     float specularProbability(const Vec3& woLocal) const;
@@ -48,6 +51,7 @@ private:
     Vec3 f0_;          // Fresnel at normal incidence of the GGX / mirror lobe
     float diffuseWeight_ = 0.f;  // (1 − metallic) for Lambert and mix
     bool hasGgx_ = false;
+    bool bumped_ = false;
     float alpha_ = 1.f;
     float eta_ = 1.f;  // glass: ηt/ηi for light leaving towards the side opposite wo
 };
@@ -70,6 +74,7 @@ inline float diffuseTransmittance(float m5) { return 1.f - (kDielectricF0 + (1.f
 // Shadow Terminator", g = (ng·wi) / ((ns·wi)(ng·ns)) in [0, 1], smoothed to −g³ + g² + g. A bumpy
 // surface lit at a grazing angle shadows part of itself; without it a normal map tilted towards
 // the light reflects more than the surface receives. 1 where ns = ng; ng, ns on wi's side.
+// Applied where a normal map bends the normal (Bsdf::bumped), not to interpolated normals.
 inline float bumpShadowing(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
     if (ns == ng) return 1.f;
     const float g = glm::dot(ng, wi) / std::max(glm::dot(ns, wi) * glm::dot(ng, ns), 1e-12f);

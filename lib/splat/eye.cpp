@@ -87,9 +87,9 @@ public:
                 if (bsdf.hasGlossyLobe()) {
                     GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight), encodeUnit(wo),
                                     bsdf.ggxAlpha()};
-                    row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse, &lobe);
+                    row.add(sp.p, bsdf.shadingNormal(), ng, bsdf.bumped(), pixel, diffuse, &lobe);
                 } else {
-                    row.add(sp.p, bsdf.shadingNormal(), ng, pixel, diffuse);
+                    row.add(sp.p, bsdf.shadingNormal(), ng, bsdf.bumped(), pixel, diffuse);
                 }
                 if (!direct_ || withFilm_) return;
                 const uint64_t key = pixelSampleKey(pixel, index);

@@ -201,6 +201,7 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
         out.samples.position.push_back(samples.position[i]);
         out.samples.normal.push_back(samples.normal[i]);
         out.samples.geomNormal.push_back(samples.geomNormal[i]);
+        out.samples.bumped.push_back(samples.bumped[i]);
         out.samples.pixel.push_back(uint32_t(out.samples.pixel.size()));
         out.samples.bsdf.push_back(bsdf);
     };

@@ -284,10 +284,10 @@ private:
 #if defined(__SSE2__)
     void receive4(const uint32_t* index, const float* visibility, int count);
     Lanes4 weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const;
-    // bsdf.h's bumpShadowing of sample i for the photon, 1 where its normals are one.
+    // bsdf.h's bumpShadowing of sample i for the photon, 1 where no normal map bent its normal.
     float shadowing(uint32_t i) const {
         const uint16_t ns = samples_.normal[i], ng = samples_.geomNormal[i];
-        return ns == ng ? 1.f : bumpShadowing(units_[ng], units_[ns], -ray_.dir);
+        return !samples_.bumped[i] || ns == ng ? 1.f : bumpShadowing(units_[ng], units_[ns], -ray_.dir);
     }
     void deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& y, const Lanes4& ng, const Lanes4& c);
     uint32_t waiting_[4];  // samples of the sweep waiting for a batch of four
