@@ -296,20 +296,21 @@ def markdown(results):
              "references of the frames (two halves of the given samples a pixel); flicker is the relative MSE "
              "of the change between two consecutive frames. Mitsuba's path tracer gets raysplat's mean wall "
              "time a frame; the ratios are Mitsuba's figure over raysplat's (above 1: raysplat ahead).", "",
-             "| scene | size, limit a frame | frames | raysplat flicker | Mitsuba flicker, new seed (ratio) | "
-             "one seed (ratio) | raysplat frame A+1 in the walk / as a still | Mitsuba frame A+1 |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| scene (commit) | size, limit a frame (mean s) | frames A, A+1 of the call's | raysplat flicker | "
+             "Mitsuba flicker, new seed a frame (ratio) | Mitsuba, one seed (ratio) | raysplat frame A+1 | "
+             "the same frame as a still | Mitsuba frame A+1 |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in results:
         fl = r.get("flicker")
         if not fl:
             continue
         f, e = fl["flicker"], fl["error"]
         a, b = fl["frames"]
-        walk = f"{a}, {b} of {fl['range_start']}–{b}"
+        walk = f"{a}, {b} of {fl['range_start']}–{b}"  # a call from the walk's start, or the pair alone
         lines.append(f"| {r['name']} ({r['machine']['commit']}) | {r['width']}×{r['height']}, {r['time_limit']:g} s ({fl['seconds_per_frame']:.1f} s) "
                      f"| {walk} | {fmt_pair(f['walk'])} | {fmt_pair(f['mitsuba_new_seed'])} "
                      f"({ratio_pair(f['mitsuba_new_seed'], f['walk'])}) | {fmt_pair(f['mitsuba_one_seed'])} "
-                     f"({ratio_pair(f['mitsuba_one_seed'], f['walk'])}) | {fmt_pair(e['walk'][1])} / "
+                     f"({ratio_pair(f['mitsuba_one_seed'], f['walk'])}) | {fmt_pair(e['walk'][1])} | "
                      f"{fmt_pair(e['still'][1])} | {fmt_pair(e['mitsuba'][1])} |")
     lines += ["", "| scene | frames in one call / one call each (CPU s) | ratio | photon passes traced | "
               "peak memory, one frame / range | stored photons |", "| --- | --- | --- | --- | --- | --- |"]
