@@ -127,6 +127,23 @@ TEST_P(NormalMap, TiltedNormalsGiveTheAnalyticRadiance) {
 INSTANTIATE_TEST_SUITE_P(GivenAndComputedTangents, NormalMap, ::testing::Values(true, false),
                          [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "Given" : "Computed"; });
 
+// A sun of 3 W/m² along the grazing direction kGrazing over the unit patch at y = 0 of `s`
+// (its lights and bounds set here): the radiance the path tracer sees at the patch's centre.
+const Vec3 kGrazing = glm::normalize(Vec3(0.95f, 0.2f, 0.f));
+float radianceUnderSun(Scene& s) {
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = -kGrazing;
+    sun.intensity = Vec3(3.f);
+    s.lights.push_back(sun);
+    s.computeBounds();
+    RayAccel accel(s, 1);
+    LightSampler lights(s);
+    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
+    Sampler sampler(1, Stage::Test, 0);
+    return tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+}
+
 // A normal map tilted towards a grazing light: the diffuse lobe takes the shadowing of
 // Chiang, Li & Burley 2019 ("Taming the Shadow Terminator"), g = (ng·l) / ((ns·l)(ng·ns)),
 // smoothed to −g³ + g² + g, as Blender's Cycles does; plain n·l would reflect 2.3 times as much
@@ -140,18 +157,8 @@ TEST(NormalMap, GrazingLightIsShadowedAsChiang2019) {
     planarUvs(s, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1));
     s.tangents.assign(s.positions.size(), Vec4(0.f));
     computeMissingTangents(s);
-    const Vec3 l = glm::normalize(Vec3(0.95f, 0.2f, 0.f)), ns(s30, c30, 0.f), ng(0.f, 1.f, 0.f);
-    PunctualLight sun;
-    sun.type = LightType::Directional;
-    sun.direction = -l;
-    sun.intensity = Vec3(3.f);
-    s.lights.push_back(sun);
-    s.computeBounds();
-    RayAccel accel(s, 1);
-    LightSampler lights(s);
-    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
-    Sampler sampler(1, Stage::Test, 0);
-    const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+    const Vec3 l = kGrazing, ns(s30, c30, 0.f), ng(0.f, 1.f, 0.f);
+    const float L = radianceUnderSun(s);
     const float g = glm::dot(ng, l) / (glm::dot(ns, l) * glm::dot(ng, ns));
     ASSERT_GT(g, 0.f);
     ASSERT_LT(g, 1.f);
@@ -168,20 +175,10 @@ TEST(NormalMap, InterpolatedNormalsAloneAreNotShadowed) {
     Scene s;
     const uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(albedo));
     addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
-    const Vec3 l = glm::normalize(Vec3(0.95f, 0.2f, 0.f)), ns(s30, c30, 0.f);
+    const Vec3 ns(s30, c30, 0.f);
     std::fill(s.normals.begin(), s.normals.end(), ns);
-    PunctualLight sun;
-    sun.type = LightType::Directional;
-    sun.direction = -l;
-    sun.intensity = Vec3(3.f);
-    s.lights.push_back(sun);
-    s.computeBounds();
-    RayAccel accel(s, 1);
-    LightSampler lights(s);
-    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
-    Sampler sampler(1, Stage::Test, 0);
-    const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
-    const float plain = albedo / kPi * 3.f * glm::dot(ns, l);
+    const float L = radianceUnderSun(s);
+    const float plain = albedo / kPi * 3.f * glm::dot(ns, kGrazing);
     EXPECT_NEAR(L, plain, 1e-3f * plain);
 }
 

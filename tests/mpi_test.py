@@ -102,24 +102,30 @@ def test_ctrl_c_stops_every_rank_cleanly():
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
         command = mpirun_command(2) + [RAYSPLAT, "render", cli.CORNELL, "-o", os.path.join(out, "x.exr"), "--png",
                     os.path.join(out, "x.png"), "--passes", "50", "--threads", "1"]
-        p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
-        # Wait until the passes have begun, then interrupt.
-        seen = ""
-        while "rendering" not in seen:
-            line = p.stderr.readline()
-            cli.check(line != "", "mpirun ended before rendering: %s" % seen)
-            seen += line
-        p.send_signal(signal.SIGINT)
-        try:
-            _, err = p.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            raise cli.Failure("the ranks did not stop within 30 s of SIGINT")
+        interrupt_after(command, "rendering", 1)  # once the passes have begun
         leftover = os.listdir(out)
+    cli.check(leftover == [], "files left behind: %r" % leftover)
+
+
+def interrupt_after(command, word, times):
+    """Runs command (an mpirun), sends it SIGINT once `word` has appeared `times` times in its
+    standard error, and checks that it stops within 30 s, exits non-zero and says "stopped" in
+    one line."""
+    p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
+    seen = ""
+    while seen.count(word) < times:
+        line = p.stderr.readline()
+        cli.check(line != "", "mpirun ended before %r appeared %d times: %s" % (word, times, seen))
+        seen += line
+    p.send_signal(signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise cli.Failure("the ranks did not stop within 30 s of SIGINT")
     stopped = [line for line in err.splitlines() if line.startswith("raysplat:") and "stopped" in line]
     cli.check(p.returncode != 0, "mpirun exited 0 after SIGINT")
     cli.check(len(stopped) == 1, "expected one 'stopped' line, got %r" % stopped)
-    cli.check(leftover == [], "files left behind: %r" % leftover)
 
 
 def walk(out, name, ranks, *args, frames=(1, 3)):
@@ -201,27 +207,13 @@ def test_ctrl_c_leaves_whole_frames():
         command = mpirun_command(2) + [RAYSPLAT, "render", os.path.join(cli.DATA, "interior_walk.gltf"), "-o",
                                        os.path.join(out, "w_####.exr"), "--frames", "0-40", "--width", "32",
                                        "--passes", "4", "--photons", "8000", "--threads", "1"]
-        p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace")
-        seen = ""
-        while seen.count("wrote") < 2:
-            line = p.stderr.readline()
-            cli.check(line != "", "mpirun ended before two frames were written: %s" % seen)
-            seen += line
-        p.send_signal(signal.SIGINT)
-        try:
-            _, err = p.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            raise cli.Failure("the ranks did not stop within 30 s of SIGINT")
+        interrupt_after(command, "wrote", 2)  # once two frames are written
         left = sorted(os.listdir(out))
         for name in left:
             cli.check(len(name) == len("w_0000.exr") and name.startswith("w_") and name.endswith(".exr"),
                       "a file that is not a frame: %r" % name)
             with open(os.path.join(out, name), "rb") as f:
                 cli.check(len(cli.exr_pixel_chunks(f.read())) > 0, "%s is not a whole EXR" % name)
-    stopped = [line for line in err.splitlines() if line.startswith("raysplat:") and "stopped" in line]
-    cli.check(p.returncode != 0, "mpirun exited 0 after SIGINT")
-    cli.check(len(stopped) == 1, "expected one 'stopped' line, got %r" % stopped)
     cli.check("w_0000.exr" in left and "w_0001.exr" in left and len(left) < 41, "frames left: %r" % left)
 
 
