@@ -95,10 +95,11 @@ public:
         return int(views_.size()) - 1;
     }
     // Appends `bytes` as a new bufferView and an accessor over it; returns the accessor index.
-    int accessor(const std::string& bytes, int componentType, int count, const char* type) {
+    int accessor(const std::string& bytes, int componentType, int count, const char* type, bool normalized = false) {
         const int v = view(bytes);
         accessors_.push_back("{\"bufferView\":" + std::to_string(v) + ",\"componentType\":" + std::to_string(componentType) +
-                             ",\"count\":" + std::to_string(count) + ",\"type\":\"" + type + "\"}");
+                             ",\"count\":" + std::to_string(count) + ",\"type\":\"" + type + "\"" +
+                             (normalized ? ",\"normalized\":true}" : "}"));
         return int(accessors_.size()) - 1;
     }
     // An accessor without a bufferView: zeros, until a sparse substitution.
@@ -814,6 +815,44 @@ TEST(Loader, SparseAccessorsMatchTheirDenseEquivalent) {
     for (int l = 0; l < kLayerCount; ++l)
         EXPECT_EQ(0, std::memcmp(a.film.layers[l].data(), b.film.layers[l].data(), a.film.pixelCount() * sizeof(Vec3)))
             << layerName(l);
+}
+
+// KHR_mesh_quantization: POSITION as shorts that are their values under a node scale of 1/1000,
+// TEXCOORD_0 as unsigned shorts that are their values, NORMAL as normalized bytes: the triangle,
+// normals and uvs of the float file. Without the extension the same integers are normalized (the
+// core rule), so the positions differ.
+TEST(Loader, QuantizedMeshesMatchTheirFloatEquivalent) {
+    TempDir dir;
+    auto write = [&](bool quantized, bool declared) {
+        GltfBuilder g;
+        int p, n, uv;
+        if (quantized) {
+            p = g.accessor(bytesOf(std::vector<int16_t>{0, 0, 0, 1000, 0, 0, 0, 1000, 0}), 5122, 3, "VEC3");
+            n = g.accessor(std::string("\x00\x00\x7f\x00\x00\x7f\x00\x00\x7f", 9), 5120, 3, "VEC3", true);
+            uv = g.accessor(bytesOf(std::vector<uint16_t>{0, 0, 2, 0, 0, 2}), kUShort, 3, "VEC2");
+        } else {
+            p = g.positions({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+            n = g.normals({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+            uv = g.accessor(bytesOf(std::vector<float>{0, 0, 2, 0, 0, 2}), kFloat, 3, "VEC2");
+        }
+        const std::string prim = "{\"attributes\":{\"POSITION\":" + std::to_string(p) + ",\"NORMAL\":" + std::to_string(n) +
+                                 ",\"TEXCOORD_0\":" + std::to_string(uv) + "}}";
+        g.node(std::string(quantized ? "\"scale\":[0.001,0.001,0.001]," : "") + "\"mesh\":" + std::to_string(g.mesh({prim})));
+        if (declared) g.extra("\"extensionsUsed\":[\"KHR_mesh_quantization\"],\"extensionsRequired\":[\"KHR_mesh_quantization\"]");
+        return g.write(dir, std::string(quantized ? "quantized" : "float") + (declared ? "_declared" : ""));
+    };
+    const Scene quantized = loadScene(write(true, true), silentReporter());
+    const Scene plain = loadScene(write(false, false), silentReporter());
+    ASSERT_EQ(quantized.positions.size(), plain.positions.size());
+    for (size_t v = 0; v < plain.positions.size(); ++v) {
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(quantized.positions[v][k], plain.positions[v][k], 1e-6f) << "vertex " << v;
+            EXPECT_NEAR(quantized.normals[v][k], plain.normals[v][k], 1e-6f) << "vertex " << v;
+        }
+        EXPECT_EQ(quantized.uvs[v], plain.uvs[v]) << "vertex " << v;
+    }
+    const Scene undeclared = loadScene(write(true, false), silentReporter());
+    EXPECT_NEAR(undeclared.positions[1].x, 1000.f / 32767.f * 0.001f, 1e-9f);
 }
 
 // Bad sparse accessors are one Error naming the file and the accessor: an index past the base

@@ -13,7 +13,7 @@ namespace {
 
 const std::set<std::string> kSupportedExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
-    "KHR_materials_ior", "KHR_texture_transform"};
+    "KHR_materials_ior", "KHR_texture_transform", "KHR_mesh_quantization"};
 
 // Material extensions read past without being honoured: what each would add.
 const std::map<std::string, std::string> kIgnoredMaterialExtensions = {
@@ -151,6 +151,7 @@ void GltfLoader::checkExtensions() {
     for (const std::string& e : model_.extensionsRequired)
         if (!kSupportedExtensions.count(e))
             fail("required extension '" + e + "' is not supported");
+    for (const std::string& e : model_.extensionsUsed) quantized_ = quantized_ || e == "KHR_mesh_quantization";
 }
 
 void GltfLoader::warnIgnoredFeatures() {

@@ -98,9 +98,11 @@ private:
     // Its RGBA size once decoded, from the header; 0 where the header cannot be read.
     size_t decodedBytes(int image) const;
     // -- Accessors and meshes (gltf_meshes.cpp)
-    // Reads accessor `index` as `n` floats per element (normalized integers become [0,1]),
-    // checking every byte it touches lies inside its buffer.
-    std::vector<float> readFloats(int index, int n, const std::string& where);
+    // Reads accessor `index` as `n` floats per element (integers normalized, to [0,1] or [−1,1]),
+    // checking every byte it touches lies inside its buffer. With `values`, the integers of an
+    // accessor not marked `normalized` are their values (KHR_mesh_quantization's positions and
+    // texture coordinates).
+    std::vector<float> readFloats(int index, int n, const std::string& where, bool values = false);
     std::vector<uint32_t> readIndices(int index, const std::string& where);
     const tinygltf::Accessor& accessor(int index, const std::string& where);
     template <class F>
@@ -132,6 +134,7 @@ private:
     std::map<std::pair<int, bool>, int> textureOfImage_;  // (image, srgb) → Scene::textures index
     bool usesTexCoord1_ = false;  // some texture slot reads TEXCOORD_1
     bool needsTangents_ = false;  // some material has a normal map
+    bool quantized_ = false;      // the file uses KHR_mesh_quantization
     std::map<std::string, int> repeated_;  // warnings by kind
     std::string gltfWarning_;  // tinygltf's first warning line, reported after a successful load
 };

@@ -7,21 +7,23 @@
 
 namespace rs::gltf {
 
-// Reads accessor `index` as `n` floats per element (normalized integers become [0,1]),
-// checking every byte it touches lies inside its buffer.
-std::vector<float> GltfLoader::readFloats(int index, int n, const std::string& where) {
+// Reads accessor `index` as `n` floats per element (gltf_loader.h), checking every byte it
+// touches lies inside its buffer.
+std::vector<float> GltfLoader::readFloats(int index, int n, const std::string& where, bool values) {
     const tinygltf::Accessor& a = accessor(index, where);
     if (tinygltf::GetNumComponentsInType(a.type) != n)
         fail(where + ": " + quoted("accessor", index, a.name) + " has the wrong type");
     std::vector<float> out(a.count * n, 0.f);
+    // An integer's divisor: its largest value where it is normalized, 1 where it is its value.
+    const bool raw = values && !a.normalized;
     forEachComponent(index, where, [&](size_t e, int c, const unsigned char* p) {
         float v = 0.f;
         switch (a.componentType) {
             case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *p / 255.f; break;
-            case TINYGLTF_COMPONENT_TYPE_BYTE: v = std::max(float(int8_t(*p)) / 127.f, -1.f); break;
-            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t u; std::memcpy(&u, p, 2); v = u / 65535.f; break; }
-            case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t u; std::memcpy(&u, p, 2); v = std::max(u / 32767.f, -1.f); break; }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = raw ? float(*p) : *p / 255.f; break;
+            case TINYGLTF_COMPONENT_TYPE_BYTE: v = raw ? float(int8_t(*p)) : std::max(float(int8_t(*p)) / 127.f, -1.f); break;
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t u; std::memcpy(&u, p, 2); v = raw ? float(u) : u / 65535.f; break; }
+            case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t u; std::memcpy(&u, p, 2); v = raw ? float(u) : std::max(u / 32767.f, -1.f); break; }
             default: fail(where + ": " + quoted("accessor", index, a.name) + " has an unsupported component type");
         }
         out[e * n + c] = v;
@@ -141,7 +143,7 @@ void GltfLoader::addMesh(int meshIndex, const Mat4& world, const std::string& no
         }
         auto pos = prim.attributes.find("POSITION");
         if (pos == prim.attributes.end()) fail(where + " has no POSITION attribute");
-        std::vector<float> p = readFloats(pos->second, 3, where);
+        std::vector<float> p = readFloats(pos->second, 3, where, quantized_);
         size_t nv = p.size() / 3;
         std::vector<float> nrm;
         if (auto it = prim.attributes.find("NORMAL"); it != prim.attributes.end()) {
@@ -207,15 +209,15 @@ GltfLoader::VertexExtras GltfLoader::readVertexExtras(const tinygltf::Primitive&
         auto it = prim.attributes.find(name);
         return it == prim.attributes.end() ? -1 : it->second;
     };
-    auto read = [&](const char* name, int n, std::vector<float>& out) {
+    auto read = [&](const char* name, int n, std::vector<float>& out, bool values = false) {
         const int a = attribute(name);
         if (a < 0) return;
-        out = readFloats(a, n, where);
+        out = readFloats(a, n, where, values);
         if (out.size() != nv * size_t(n)) fail(where + ": " + name + " and POSITION counts differ");
     };
-    read("TEXCOORD_0", 2, x.uv0);
+    read("TEXCOORD_0", 2, x.uv0, quantized_);
     x.keepUv1 = usesTexCoord1_;
-    if (x.keepUv1) read("TEXCOORD_1", 2, x.uv1);
+    if (x.keepUv1) read("TEXCOORD_1", 2, x.uv1, quantized_);
     if (const int a = attribute("COLOR_0"); a >= 0) {
         const tinygltf::Accessor& acc = accessor(a, where);
         const int n = tinygltf::GetNumComponentsInType(acc.type);
@@ -237,8 +239,12 @@ GltfLoader::VertexExtras GltfLoader::readVertexExtras(const tinygltf::Primitive&
     x.keepTangents = needsTangents_;
     if (const int a = attribute("TANGENT"); a >= 0) {
         const tinygltf::Accessor& acc = accessor(a, where);
-        if (acc.type != TINYGLTF_TYPE_VEC4 || acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT)
-            fail(where + ": TANGENT " + quoted("accessor", a, acc.name) + " is not VEC4 of floats");
+        // KHR_mesh_quantization also allows normalized bytes and shorts.
+        const bool integer = acc.normalized && (acc.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+                                                acc.componentType == TINYGLTF_COMPONENT_TYPE_SHORT);
+        if (acc.type != TINYGLTF_TYPE_VEC4 || (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && !(quantized_ && integer)))
+            fail(where + ": TANGENT " + quoted("accessor", a, acc.name) + " is not VEC4 of floats" +
+                 (quantized_ ? " or of normalized bytes or shorts" : ""));
         if (x.keepTangents && material < model_.materials.size() && model_.materials[material].normalTexture.index >= 0)
             read("TANGENT", 4, x.tangent);
     }
