@@ -321,6 +321,30 @@ TEST(TextureTransform, ScaleTwoEqualsDoubledUvs) {
     EXPECT_GT(differ / double(plain.film.pixelCount()), 0.05 * layerMean(plain.film, kDirect));
 }
 
+// The mip level follows the slot's own uvs: a 256² checker of 8-texel cells, seen at about 10
+// texels a pixel, through a transform of scale 2, at doubled uvs and through TEXCOORD_1 holding
+// those uvs (TEXCOORD_0 all zero), filters alike: the footprint is measured in each slot's uv
+// set and scaled by its transform.
+TEST(TextureTransform, MipLevelFollowsTheSlotsUvsAndScale) {
+    std::vector<Vec4> cells;
+    for (int y = 0; y < 256; ++y)
+        for (int x = 0; x < 256; ++x) cells.push_back(Vec4((x / 8 + y / 8) % 2 ? Vec3(0.1f, 0.3f, 0.9f) : Vec3(0.9f, 0.2f, 0.2f), 1.f));
+    auto checkered = [&](int texCoord, float scale, float uvScale) {
+        Scene s = litFloor(Vec3(1.f));
+        Material& m = s.materials[0];
+        m.baseColorTexture.texture = addTexture(s, 256, 256, cells);
+        m.baseColorTexture.texCoord = texCoord;
+        m.baseColorTexture.transform.scale = Vec2(scale);
+        for (Vec2& uv : s.uvs) uv *= uvScale;
+        if (texCoord == 1) s.uvs1 = s.uvs, s.uvs.assign(s.uvs.size(), Vec2(0.f));
+        return s;
+    };
+    const RenderResult transformed = pathImage(checkered(0, 2.f, 1.f), 4), doubled = pathImage(checkered(0, 1.f, 2.f), 4);
+    const RenderResult second = pathImage(checkered(1, 1.f, 2.f), 4);
+    expectSameImage(transformed, doubled, 1e-4f);
+    expectSameImage(second, doubled, 1e-4f);
+}
+
 // -- Emissive textures are lights ------------------------------------------------------------
 
 namespace {

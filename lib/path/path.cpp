@@ -56,7 +56,7 @@ PathRadiance tracePath(const Scene& scene, const RayAccel& accel, const LightSam
             out.layer[cls.layerOfHit()] += beta * environmentSeen(lights, prevDelta ? 0.f : prevPdf, d);
             break;
         }
-        cone.footprintAt(sp, scene, t, d);
+        cone.footprintAt(sp, t, d);
         const Material& m = scene.materials[sp.material];
 
         // Emitters: front face only; MIS against the light sampling of the previous vertex.

@@ -14,9 +14,10 @@ struct SurfacePoint {
     Vec3 ng;         // geometric normal of the winding (front side), unit
     Vec3 ns;         // shading normal (interpolated, turned by a normal map), unit
     ShadingAttributes attr;  // uvs and vertex colour
-    // Width of the ray's footprint across the surface in uv units (ray_cone.h), for filtering
-    // textures (Texture::lodOf); 0, as intersect() leaves it: a point, the full-size image.
-    float uvFootprint = 0.f;
+    // Width of the ray's footprint across the surface in world units (ray_cone.h), for
+    // filtering textures (Scene::uvFootprint, Texture::lodOf); 0, as intersect() leaves it: a
+    // point, the full-size image.
+    float footprint = 0.f;
     uint32_t tri = 0;
     uint32_t material = 0;
     bool frontFace = true;  // the ray came from the side ng points to

@@ -67,7 +67,7 @@ float fresnelDielectric(float cosThetaI, float eta) {
 }
 
 Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
-    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.attr, sp.uvFootprint)) {
+    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.attr, sp.footprint, sp.tri)) {
     const Material& m = *material_;
     bool outside = glm::dot(wo, sp.ng) >= 0.f;
     ng_ = outside ? sp.ng : -sp.ng;

@@ -1,8 +1,9 @@
 // Ray cones for texture filtering (docs/design.md §3; the ray-cone rule of "Texture Level of
 // Detail Strategies for Real-Time Ray Tracing", Akenine-Möller et al.): a ray stands for a cone
 // of rays, `width` wide (world units) where it starts and widening by `spread` (radians) per unit
-// of length. Where it hits a surface it covers width / |cos θ| there, which SurfacePoint's
-// uvFootprint states in uv units and Texture::lodOf turns into a mip level: texture detail finer
+// of length. Where it hits a surface it covers width / |cos θ| there (SurfacePoint::footprint),
+// which each texture slot states in its own uv units (Scene::uvFootprint: its uv set, its
+// transform's scale) and Texture::lodOf turns into a mip level: texture detail finer
 // than what a pixel (or a bounce's lobe) averages is averaged by the mip chain instead of by
 // noise between samples.
 #pragma once
@@ -36,10 +37,10 @@ struct RayCone {
 
     float widthAt(float t) const { return width + spread * t; }
 
-    // Sets sp.uvFootprint for the cone's hit at distance t along direction d (unit).
-    void footprintAt(SurfacePoint& sp, const Scene& scene, float t, const Vec3& d) const {
+    // Sets sp.footprint for the cone's hit at distance t along direction d (unit).
+    void footprintAt(SurfacePoint& sp, float t, const Vec3& d) const {
         const float cosine = std::max(std::abs(glm::dot(sp.ng, d)), kMinCos);
-        sp.uvFootprint = widthAt(t) / cosine * scene.uvPerWorld(sp.tri);
+        sp.footprint = widthAt(t) / cosine;
     }
 
     // The cone leaving the hit at distance t once bsdf scattered it: a mirror or glass keeps the

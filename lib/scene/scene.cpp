@@ -62,8 +62,10 @@ float Scene::triangleArea(size_t tri) const {
     return 0.5f * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
 }
 
-float Scene::uvPerWorld(size_t tri) const {
-    const Vec2* uv = &uvs[3 * tri];
+float Scene::uvPerWorld(size_t tri, int set) const {
+    const std::vector<Vec2>& in = set == 1 ? uvs1 : uvs;
+    if (in.size() < 3 * tri + 3) return 0.f;
+    const Vec2* uv = &in[3 * tri];
     const Vec2 a = uv[1] - uv[0], b = uv[2] - uv[0];
     const float uvArea = 0.5f * std::abs(a.x * b.y - a.y * b.x), area = triangleArea(tri);
     return area > 0.f ? std::sqrt(uvArea / area) : 0.f;

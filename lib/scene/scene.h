@@ -165,13 +165,16 @@ struct Scene {
     // The uv of slot `ref` at corner k of triangle `tri`: the transform is affine, so these
     // interpolate to textureUv across the triangle.
     Vec2 cornerTextureUv(const TextureRef& ref, size_t tri, int k) const;
-    // Base colour at a surface point: factor × texture × COLOR_0, the texture filtered over a
-    // footprint `uvFootprint` wide in uv units (SurfacePoint::uvFootprint; 0: bilinear in the
-    // full-size image).
-    Vec3 albedo(uint32_t material, const ShadingAttributes& a, float uvFootprint = 0.f) const;
-    // uv units per world unit on triangle tri: the square root of its uv area over its area
-    // (0 where the uvs are degenerate). A footprint w wide on the surface is w × this in uv.
-    float uvPerWorld(size_t tri) const;
+    // Base colour at a surface point of triangle tri: factor × texture × COLOR_0, the texture
+    // filtered over a footprint `footprint` wide on the surface (SurfacePoint::footprint; 0:
+    // bilinear in the full-size image).
+    Vec3 albedo(uint32_t material, const ShadingAttributes& a, float footprint = 0.f, uint32_t tri = 0) const;
+    // A footprint `footprint` wide on triangle tri in the uv units of texture slot `ref`: × its
+    // uv set's uvPerWorld × the geometric mean of its transform's scale.
+    float uvFootprint(const TextureRef& ref, float footprint, size_t tri) const;
+    // uv units per world unit on triangle tri in uv set `set` (TEXCOORD_0 or _1): the square root
+    // of its uv area over its area (0 where the uvs are degenerate or missing).
+    float uvPerWorld(size_t tri, int set = 0) const;
     // Alpha at a surface point: factor × the texel's alpha × COLOR_0's.
     float alphaAt(uint32_t material, const ShadingAttributes& a) const;
     // (metallic, roughness) at a surface point: the factors × the texture's B and G.

@@ -32,12 +32,18 @@ Vec2 Scene::cornerTextureUv(const TextureRef& ref, size_t tri, int k) const {
     return ref.transform.apply(uv);
 }
 
-Vec3 Scene::albedo(uint32_t material, const ShadingAttributes& a, float uvFootprint) const {
+float Scene::uvFootprint(const TextureRef& ref, float footprint, size_t tri) const {
+    if (!(footprint > 0.f)) return 0.f;
+    const Vec2 s = ref.transform.scale;
+    return footprint * uvPerWorld(tri, ref.texCoord) * std::sqrt(std::abs(s.x * s.y));
+}
+
+Vec3 Scene::albedo(uint32_t material, const ShadingAttributes& a, float footprint, uint32_t tri) const {
     const Material& m = materials[material];
     Vec3 c = m.baseColor * Vec3(a.color);
     if (!m.baseColorTexture.present()) return c;
     const Texture& t = textures[size_t(m.baseColorTexture.texture)];
-    return c * Vec3(t.sample(textureUv(m.baseColorTexture, a), t.lodOf(uvFootprint)));
+    return c * Vec3(t.sample(textureUv(m.baseColorTexture, a), t.lodOf(uvFootprint(m.baseColorTexture, footprint, tri))));
 }
 
 float Scene::alphaAt(uint32_t material, const ShadingAttributes& a) const {

@@ -40,7 +40,7 @@ public:
     // Linear RGBA: trilinear between mip levels `lod` (0: the image itself; fractions blend two
     // levels), bilinear within a level, repeat wrap.
     Vec4 sample(Vec2 uv, float lod = 0.f) const;
-    // The mip level for a footprint `uvFootprint` wide in uv units (SurfacePoint::uvFootprint):
+    // The mip level for a footprint `uvFootprint` wide in uv units (Scene::uvFootprint):
     // log2 of the texels it spans (the ray-cone rule of "Texture Level of Detail Strategies for
     // Real-Time Ray Tracing", Akenine-Möller et al., with the texture's size split off so that
     // one footprint serves every texture of a material); 0 or below for a point.

@@ -35,7 +35,7 @@ void followCameraRay(const Scene& scene, const RayAccel& accel, const Environmen
             if (env) emission += weight * env->radiance(d);
             return;
         }
-        cone.footprintAt(sp, scene, t, d);
+        cone.footprintAt(sp, t, d);
         const Material& m = scene.materials[sp.material];
         if (m.isEmissive() && sp.frontFace) emission += weight * scene.emissionAt(sp.material, sp.attr);
         const Vec3 wo = -d;

@@ -95,7 +95,7 @@ void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& li
         float t;
         if (!accel.intersect(o, d, kInf, sp, t)) return;
         lengthSince += t;
-        cone.footprintAt(sp, scene, t, d);
+        cone.footprintAt(sp, t, d);
         Bsdf bsdf(scene, sp, -d);
         if (!bsdf.isDelta()) {
             PhotonRay r;
