@@ -88,6 +88,28 @@ Scene litFloor(Vec3 baseColor, MaterialKind kind = MaterialKind::Lambert) {
 // space; one path is exact (the light is a delta, nothing else is in the scene).
 class NormalMap : public ::testing::TestWithParam<bool> {};
 
+// A sun of 3 W/m² shining along −l onto `s` (its bounds set here), as the patch tests light.
+void addSun(Scene& s, const Vec3& l) {
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = -l;
+    sun.intensity = Vec3(3.f);
+    s.lights.push_back(sun);
+    s.computeBounds();
+}
+
+// The radiance the path tracer sees at (x, 0, 0.5) from just above it (sampler stream `stream`).
+float radianceAt(const Scene& s, float x, uint64_t stream = 0) {
+    RayAccel accel(s, 1);
+    LightSampler lights(s);
+    const Vec3 target(x, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
+    Sampler sampler(1, Stage::Test, stream);
+    return tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+}
+
+// The grazing light of the bump-shadowing tests.
+const Vec3 kGrazing = glm::normalize(Vec3(0.95f, 0.2f, 0.f));
+
 TEST_P(NormalMap, TiltedNormalsGiveTheAnalyticRadiance) {
     const bool givenTangents = GetParam();
     const float albedo = 0.7f, s30 = 0.5f, c30 = std::sqrt(3.f) / 2.f;
@@ -105,18 +127,9 @@ TEST_P(NormalMap, TiltedNormalsGiveTheAnalyticRadiance) {
     computeMissingTangents(s);
     for (const Vec4& t : s.tangents) EXPECT_LT(glm::length(t - Vec4(1, 0, 0, 1)), 1e-5f);
     const Vec3 l = glm::normalize(Vec3(0.6f, 1.f, -0.5f));
-    PunctualLight sun;
-    sun.type = LightType::Directional;
-    sun.direction = -l;
-    sun.intensity = Vec3(3.f);
-    s.lights.push_back(sun);
-    s.computeBounds();
-    RayAccel accel(s, 1);
-    LightSampler lights(s);
+    addSun(s, l);
     for (int p = 0; p < 2; ++p) {
-        const Vec3 target(2.f * float(p) + 0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
-        Sampler sampler(1, Stage::Test, uint64_t(p));
-        const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+        const float L = radianceAt(s, 2.f * float(p) + 0.5f, uint64_t(p));
         const float expected = albedo / kPi * 3.f * glm::dot(world[p], l);
         const float flat = albedo / kPi * 3.f * l.y;
         EXPECT_NEAR(L, expected, 0.02f * expected) << "patch " << p << " (flat would be " << flat << ")";
@@ -126,23 +139,6 @@ TEST_P(NormalMap, TiltedNormalsGiveTheAnalyticRadiance) {
 
 INSTANTIATE_TEST_SUITE_P(GivenAndComputedTangents, NormalMap, ::testing::Values(true, false),
                          [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "Given" : "Computed"; });
-
-// A sun of 3 W/m² along the grazing direction kGrazing over the unit patch at y = 0 of `s`
-// (its lights and bounds set here): the radiance the path tracer sees at the patch's centre.
-const Vec3 kGrazing = glm::normalize(Vec3(0.95f, 0.2f, 0.f));
-float radianceUnderSun(Scene& s) {
-    PunctualLight sun;
-    sun.type = LightType::Directional;
-    sun.direction = -kGrazing;
-    sun.intensity = Vec3(3.f);
-    s.lights.push_back(sun);
-    s.computeBounds();
-    RayAccel accel(s, 1);
-    LightSampler lights(s);
-    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
-    Sampler sampler(1, Stage::Test, 0);
-    return tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
-}
 
 // A normal map tilted towards a grazing light: the diffuse lobe takes the shadowing of
 // Chiang, Li & Burley 2019 ("Taming the Shadow Terminator"), g = (ng·l) / ((ns·l)(ng·ns)),
@@ -158,7 +154,8 @@ TEST(NormalMap, GrazingLightIsShadowedAsChiang2019) {
     s.tangents.assign(s.positions.size(), Vec4(0.f));
     computeMissingTangents(s);
     const Vec3 l = kGrazing, ns(s30, c30, 0.f), ng(0.f, 1.f, 0.f);
-    const float L = radianceUnderSun(s);
+    addSun(s, kGrazing);
+    const float L = radianceAt(s, 0.5f);
     const float g = glm::dot(ng, l) / (glm::dot(ns, l) * glm::dot(ng, ns));
     ASSERT_GT(g, 0.f);
     ASSERT_LT(g, 1.f);
@@ -177,7 +174,8 @@ TEST(NormalMap, InterpolatedNormalsAloneAreNotShadowed) {
     addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
     const Vec3 ns(s30, c30, 0.f);
     std::fill(s.normals.begin(), s.normals.end(), ns);
-    const float L = radianceUnderSun(s);
+    addSun(s, kGrazing);
+    const float L = radianceAt(s, 0.5f);
     const float plain = albedo / kPi * 3.f * glm::dot(ns, kGrazing);
     EXPECT_NEAR(L, plain, 1e-3f * plain);
 }
