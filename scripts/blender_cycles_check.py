@@ -189,7 +189,7 @@ def picture(images, studyutil, a, b, block, path):
     pad = np.full((a.shape[0], 4, 3), 255, np.uint8)
     rgb = np.hstack([images.to_srgb8(a, e), pad, images.to_srgb8(b, e), pad,
                      zmap[:a.shape[0], :a.shape[1]].astype(np.uint8)])
-    from make_scenes import png_rgba  # stdlib only: bpy's Python has no PIL
+    from gltf_builder import png_rgba  # stdlib only: bpy's Python has no PIL
     path.write_bytes(png_rgba(rgb.shape[1], rgb.shape[0], lambda x, y: tuple(int(v) for v in rgb[y, x]) + (255,)))
 
 

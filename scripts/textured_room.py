@@ -21,8 +21,8 @@ are 64-128 px PNGs in the .bin; the file stays under 100 kB.
 
 import math
 
-from make_scenes import (X, Y, Z, GltfBuilder, add, box_maker, cross, leaf_png, mul, normalize,
-                         png_rgba, quad_node, rect, uv_sphere)
+from gltf_builder import (X, Y, Z, GltfBuilder, add, box_maker, cross, leaf_png, mul, normalize,
+                          png_rgba, quad_node, rect, uv_sphere)
 
 ROOM_X, ROOM_H, ROOM_Z = 2.0, 2.6, 2.0  # x, z in [-ROOM_X, ROOM_X] x [-ROOM_Z, ROOM_Z]
 
