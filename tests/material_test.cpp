@@ -296,19 +296,24 @@ TEST(TextureTransform, ExtensionExampleTakesTheLowerLeftQuadrant) {
     }
 }
 
+// litFloor in white with an n × n base colour texture read through uv set `texCoord` and a
+// transform of `scale`, its uvs times `uvScale` (on TEXCOORD_1, TEXCOORD_0 all zero).
+Scene texturedFloor(int n, const std::vector<Vec4>& texels, int texCoord, float scale, float uvScale) {
+    Scene s = litFloor(Vec3(1.f));
+    Material& m = s.materials[0];
+    m.baseColorTexture.texture = addTexture(s, n, n, texels);
+    m.baseColorTexture.texCoord = texCoord;
+    m.baseColorTexture.transform.scale = Vec2(scale);
+    for (Vec2& uv : s.uvs) uv *= uvScale;
+    if (texCoord == 1) s.uvs1 = s.uvs, s.uvs.assign(s.uvs.size(), Vec2(0.f));
+    return s;
+}
+
 // A checker base colour read through a transform of scale 2 renders as the same texture read
 // at doubled uvs; and through TEXCOORD_1 holding those doubled uvs.
 TEST(TextureTransform, ScaleTwoEqualsDoubledUvs) {
-    auto checkered = [](int texCoord, float scale, float uvScale) {
-        Scene s = litFloor(Vec3(1.f));
-        Material& m = s.materials[0];
-        m.baseColorTexture.texture = addTexture(s, 4, 4, checker(4, Vec3(0.9f, 0.2f, 0.2f), Vec3(0.1f, 0.3f, 0.9f)));
-        m.baseColorTexture.texCoord = texCoord;
-        m.baseColorTexture.transform.scale = Vec2(scale);
-        for (Vec2& uv : s.uvs) uv *= uvScale;
-        if (texCoord == 1) s.uvs1 = s.uvs, s.uvs.assign(s.uvs.size(), Vec2(0.f));
-        return s;
-    };
+    const std::vector<Vec4> texels = checker(4, Vec3(0.9f, 0.2f, 0.2f), Vec3(0.1f, 0.3f, 0.9f));
+    auto checkered = [&](int texCoord, float scale, float uvScale) { return texturedFloor(4, texels, texCoord, scale, uvScale); };
     const RenderResult transformed = pathImage(checkered(0, 2.f, 1.f), 4), doubled = pathImage(checkered(0, 1.f, 2.f), 4);
     const RenderResult second = pathImage(checkered(1, 1.f, 2.f), 4), plain = pathImage(checkered(0, 1.f, 1.f), 4);
     expectSameImage(transformed, doubled, 1e-4f);
@@ -327,16 +332,7 @@ TEST(TextureTransform, MipLevelFollowsTheSlotsUvsAndScale) {
     std::vector<Vec4> cells;
     for (int y = 0; y < 256; ++y)
         for (int x = 0; x < 256; ++x) cells.push_back(Vec4((x / 8 + y / 8) % 2 ? Vec3(0.1f, 0.3f, 0.9f) : Vec3(0.9f, 0.2f, 0.2f), 1.f));
-    auto checkered = [&](int texCoord, float scale, float uvScale) {
-        Scene s = litFloor(Vec3(1.f));
-        Material& m = s.materials[0];
-        m.baseColorTexture.texture = addTexture(s, 256, 256, cells);
-        m.baseColorTexture.texCoord = texCoord;
-        m.baseColorTexture.transform.scale = Vec2(scale);
-        for (Vec2& uv : s.uvs) uv *= uvScale;
-        if (texCoord == 1) s.uvs1 = s.uvs, s.uvs.assign(s.uvs.size(), Vec2(0.f));
-        return s;
-    };
+    auto checkered = [&](int texCoord, float scale, float uvScale) { return texturedFloor(256, cells, texCoord, scale, uvScale); };
     const RenderResult transformed = pathImage(checkered(0, 2.f, 1.f), 4), doubled = pathImage(checkered(0, 1.f, 2.f), 4);
     const RenderResult second = pathImage(checkered(1, 1.f, 2.f), 4);
     expectSameImage(transformed, doubled, 1e-4f);
