@@ -56,7 +56,7 @@ TEST(SparseReceivers, EverySampleHasOneOnItsOwnSurface) {
         bool covered = false;
         for (uint32_t s = 0; s < r.irradianceSlots && !covered; ++s) {
             const Vec3 q = r.position[s], m = decodeUnit16(r.normal[s]);
-            if (receiverWeight(p, n, n, q, m, decodeUnit16(r.geomNormal[s]), spacing) <= 0.f) continue;
+            if (receiverWeight(p, n, n, q, r.normal[s], r.geomNormal[s], spacing) <= 0.f) continue;
             covered = true;
             EXPECT_LT(glm::length(q - p), spacing);
             EXPECT_GT(glm::dot(n, m), 0.9f);

@@ -56,8 +56,7 @@ public:
         int& head = headOf(cellOf(p, invCell_));
         for (int k = head; k >= 0; k = next_[size_t(k)]) {
             const uint32_t r = chosen_[size_t(k)];
-            if (receiverWeight(p, n, g, samples_.position[r], decodeUnit16(samples_.normal[r]),
-                               decodeUnit16(samples_.geomNormal[r]), spacing_) > 0.f)
+            if (receiverWeight(p, n, g, samples_.position[r], samples_.normal[r], samples_.geomNormal[r], spacing_) > 0.f)
                 return;
         }
         next_.push_back(head);
@@ -137,10 +136,11 @@ inline int64_t fixedOf(double v, double scale) {
 }  // namespace
 
 float receiverWeight(const Vec3& sample, const Vec3& sampleNormal, const Vec3& sampleGeomNormal, const Vec3& receiver,
-                     const Vec3& receiverNormal, const Vec3& receiverGeomNormal, float spacing) {
+                     uint16_t receiverNormal16, uint16_t receiverGeomNormal16, float spacing) {
     const Vec3 d = receiver - sample;
     const float s2 = spacing * spacing, d2 = glm::dot(d, d);
     if (!(d2 < s2)) return 0.f;
+    const Vec3 receiverNormal = decodeUnit16(receiverNormal16), receiverGeomNormal = decodeUnit16(receiverGeomNormal16);
     if (glm::dot(sampleNormal, receiverNormal) < IrradianceSettings::kMinNormalCos) return 0.f;
     if (!(glm::dot(sampleGeomNormal, receiverGeomNormal) > 0.f)) return 0.f;
     const float plane = IrradianceSettings::kMaxPlaneOffset * spacing;
@@ -242,8 +242,7 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples, c
                 cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
                 for (uint32_t j = begin; j < end; ++j) {
                     const uint32_t s = r.cellSlots[j];
-                    const float w = receiverWeight(p, n, g, r.position[s], decodeUnit16(r.normal[s]), decodeUnit16(r.geomNormal[s]),
-                                                   r.spacing);
+                    const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
                     if (w <= 0.f) continue;
                     weights += w;
                     for (int c = 0; c < 3; ++c) sum[c] += double(w) * double(slots[size_t(s) * 3 + c]);

@@ -75,7 +75,9 @@ void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& sa
 
 // A receiver's weight for an eye sample (0: it does not stand for it): (1 − d²/s²)² within the
 // spacing s on the same surface (IrradianceSettings). The choice and the gather ask the same.
+// The receiver's normals come encoded (EyeSamples): most receivers asked lie past the spacing,
+// and are refused before their normals are decoded.
 float receiverWeight(const Vec3& sample, const Vec3& sampleNormal, const Vec3& sampleGeomNormal, const Vec3& receiver,
-                     const Vec3& receiverNormal, const Vec3& receiverGeomNormal, float spacing);
+                     uint16_t receiverNormal, uint16_t receiverGeomNormal, float spacing);
 
 }  // namespace rs
