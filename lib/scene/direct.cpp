@@ -46,7 +46,9 @@ Vec3 directSamples(const RayAccel& accel, const LightSampler& lights, const Surf
         Vec2 u;
         lightNumbers(k, uChoice, u);
         sum += sampleLightDirect(accel, lights, sp, bsdf, wo, std::min(uChoice, 0x1.fffffep-1f), u);
-        // BSDF sampling: emitted light met first by the sampled ray.
+        // BSDF sampling: emitted light met first by the sampled ray (none to meet under punctual
+        // lights alone, whose light samples then take the whole weight).
+        if (lights.onlyPunctual()) continue;
         float uLobe = sampler.get1D();
         BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
         if (!(bs.pdf > 0.f) || isBlack(bs.weight) || bs.delta) continue;

@@ -6,6 +6,8 @@
 // E·A⊥(d), and ∫L(ω)·A⊥(−ω) dω.
 #include "scene/lights.h"
 
+#include <algorithm>
+
 #include "core/sampling.h"
 
 namespace rs {
@@ -52,6 +54,7 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         }
         entries_.push_back({Kind::Environment, 0, power});
     }
+    onlyPunctual_ = std::all_of(entries_.begin(), entries_.end(), [](const Entry& e) { return e.kind == Kind::Punctual; });
     double total = 0.0;
     for (const Entry& e : entries_) total += e.power;
     double acc = 0.0;

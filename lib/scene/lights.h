@@ -51,6 +51,9 @@ public:
     // cross a portal: a point on them chosen by area projected across the photon's direction.
     EmissionSample sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const;
     bool hasPortals() const { return !portals_.empty(); }
+    // Point, spot and directional lights only: no emitter and no environment that a ray could
+    // meet, so a BSDF-sampled ray can find no light.
+    bool onlyPunctual() const { return onlyPunctual_; }
 
 private:
     enum class Kind : uint8_t { Area, Punctual, Environment };
@@ -94,6 +97,7 @@ private:
     int32_t environmentEntry_ = -1;
     Vec3 sceneCenter_;
     float sceneRadius_ = 1.f;
+    bool onlyPunctual_ = false;
 };
 
 }  // namespace rs
