@@ -220,6 +220,10 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
              [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
     cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one), instead of --passes; with --frames, each frame's time",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
+    cmd.add({"--film-passes", "N",
+             "after the passes, N passes of the direct film alone: its camera samples for direct light, emission, albedo and "
+             "normal, no photons (default 0); with --time-limit the time left after the last whole pass goes to them by itself",
+             [&](const std::string& v) { cfg.filmPasses = parseCount<int>("--film-passes", v); }});
     cmd.add({"--seed", "N", "seed of every random sequence (default " + std::to_string(d.splat.seed) + ")", [&](const std::string& v) { cfg.seed = parseNumber<uint64_t>("--seed", v); }});
     cmd.add({"--threads", "N", "worker threads (default 0: every core this process may run on); the image does not depend on it",
              [&](const std::string& v) { cfg.threads = parseNumber<int>("--threads", v); }});

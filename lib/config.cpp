@@ -99,6 +99,13 @@ void RenderConfig::validate() const {
     requireRange("max-depth", maxDepth, 1, 1024);
     requireRange("threads", threads, 0, 1024);
     requireRange("time-limit", timeLimit, 0, 1e7);
+    requireRange("film-passes", filmPasses, 0, 1 << 20);
+    if (filmPasses > 0 && (!splats() || !directBySampling() || directSpp <= 0))
+        throw Error(ErrorKind::Config, "`film-passes` adds passes of the direct film: only with a splat method, `direct` sample "
+                                       "and `direct-spp` above 0");
+    if (filmPasses > 0 && timeLimit > 0.0)
+        throw Error(ErrorKind::Config, "`film-passes` gives a number of film passes; with `time-limit` the time left after the "
+                                       "last whole pass goes to them by itself");
     requireRange("exposure", exposure, -50, 50);
     requireRange("env-strength", envStrength, 0, 1e9);
     requireRange("env-rotation", envRotation, -36000, 36000);
@@ -127,9 +134,10 @@ void RenderConfig::validate() const {
         if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
             throw Error(ErrorKind::Io, *f + ": directory " + dir.string() + " does not exist");
     }
-    if (timeLimit <= 0.0 && passCount() > maxPasses())
-        throw Error(ErrorKind::Config, "`passes` " + std::to_string(passCount()) + " × the samples a pixel of a pass count past 2^31 (at most " +
-                                           std::to_string(maxPasses()) + " passes)");
+    if (timeLimit <= 0.0 && passCount() + filmPasses > maxPasses())
+        throw Error(ErrorKind::Config, "`passes` " + std::to_string(passCount() + filmPasses) +
+                                           " × the samples a pixel of a pass count past 2^31 (at most " +
+                                           std::to_string(maxPasses()) + " passes, film passes included)");
     double pixels = double(width ? width : height) * double(height ? height : width);
     if (pixels * samplesPerPixel() > 1e12) throw Error(ErrorKind::Config, "`width` × `height` × `spp` is absurdly large");
 }
@@ -231,6 +239,7 @@ ImageAttributes RenderConfig::attributes() const {
         a["direct"] = directMethodName(direct);
         if (directBySampling()) a["lightSamples"] = std::to_string(lightSamples);
         if (directBySampling()) a["directSpp"] = std::to_string(directSpp);
+        if (filmPasses > 0) a["filmPasses"] = std::to_string(filmPasses);
         a["alpha"] = std::to_string(alpha);
         a["kernelScale"] = kernelScale > 0.f ? std::to_string(kernelScale) : probesKernelScale() ? "auto" : "1";
         a["photons"] = std::to_string(photons);

@@ -67,6 +67,10 @@ struct RenderConfig {
     // and `passes` is ignored. Splat's 8: one pass shows the kernels' blotches, eight little.
     int passes = 0;
     double timeLimit = 0.0;  // seconds; > 0: render passes until the time is up
+    // Splat, light sampled in a direct film: after the passes, this many passes of the direct film
+    // alone (docs/design.md §9). With a time limit, the time no whole pass fits in goes to
+    // such passes by itself, and this stays 0.
+    int filmPasses = 0;
     // Kernel shrinkage between passes (Knaus & Zwicker 2011): r²(i+1) = r²(i)·(i + α)/(i + 1).
     float alpha = 2.f / 3.f;
     // The indirect kernels' scale, after the clamps: > 0 as given; 0 (auto): with direct light

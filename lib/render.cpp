@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 
 #include "core/error.h"
 #include "core/simd.h"
@@ -68,8 +69,38 @@ PathSettings pathSettings(const RenderContext& c) {
 // time limit) and returns the seconds a pass needs to be worth starting: a whole pass of the
 // path tracer's; a splat pass stops early at the deadline with an unbiased share of its photons
 // (docs/design.md §9), so that is less than its whole time.
+// A pass of the eye film alone: pass `pass`'s film samples into the sum; returns its seconds.
+using FilmPass = std::function<double(int pass, FixedFilm& sum)>;
+
+// Passes of the eye film alone (docs/design.md §9) after the `first` passes, in rounds of one a
+// rank: cfg.filmPasses of them, or under a time limit as many as rank 0's clock says fit in the
+// time the whole passes left, each taking at most `estimate` seconds until one is timed.
+// Returns how many.
+int renderFilmPasses(const RenderContext& c, const FilmPass& filmPass, double estimate, const Timer& t, int first,
+                     FixedFilm& sum) {
+    const bool timed = c.cfg.timeLimit > 0.0;
+    const int ranks = c.ranks.size(), me = c.ranks.rank();
+    double longest = estimate;
+    int done = 0;
+    auto more = [&] {
+        return timed ? longest > 0.0 && t.seconds() + longest <= c.cfg.timeLimit && first + done + ranks <= c.cfg.maxPasses()
+                     : done < c.cfg.filmPasses;
+    };
+    while (agreeOrStop(c.ranks, more())) {
+        throwIfStopped();
+        const int round = timed ? ranks : std::min(ranks, c.cfg.filmPasses - done);
+        if (me < round) {
+            const double seconds = filmPass(first + done + me, sum);
+            longest = done == 0 ? seconds : std::max(longest, seconds);
+        }
+        done += round;
+    }
+    return done;
+}
+
 template <class RenderPass>
-Film renderPasses(const RenderContext& c, RenderPass&& pass, bool firstShared = false, const double* nextSeconds = nullptr) {
+Film renderPasses(const RenderContext& c, RenderPass&& pass, bool firstShared = false, const double* nextSeconds = nullptr,
+                  const FilmPass& filmPass = nullptr, const double* filmSeconds = nullptr) {
     Timer t;
     const Deadline deadline = c.cfg.timeLimit > 0.0 ? Deadline{&t, c.cfg.timeLimit} : Deadline{};
     FixedFilm sum(c.width, c.height);
@@ -99,12 +130,18 @@ Film renderPasses(const RenderContext& c, RenderPass&& pass, bool firstShared = 
         more = agreeOrStop(c.ranks, timed ? t.seconds() + longest <= c.cfg.timeLimit && passes + ranks <= c.cfg.maxPasses()
                                           : passes < wanted);
     }
+    const int filmPasses = filmPass && (timed || c.cfg.filmPasses > 0)
+                               ? renderFilmPasses(c, filmPass, *filmSeconds, t, passes, sum) : 0;
     if (several) c.reporter.end();
     for (std::vector<int64_t>& buffer : sum.buffers) c.ranks.sumAtRoot(buffer);
-    std::vector<int64_t> photonPasses(sum.photonPasses, sum.photonPasses + 3);
-    c.ranks.sumAtRoot(photonPasses);
-    std::copy(photonPasses.begin(), photonPasses.end(), sum.photonPasses);
+    std::vector<int64_t> counted(sum.photonPasses, sum.photonPasses + 3);
+    counted.push_back(sum.filmPasses);
+    c.ranks.sumAtRoot(counted);
+    std::copy(counted.begin(), counted.begin() + 3, sum.photonPasses);
+    sum.filmPasses = counted[3];
+    const std::vector<int64_t>& photonPasses = counted;
     c.stats.setCount("passes", passes);
+    if (filmPass) c.stats.setCount("film_passes", filmPasses);
     if (photonPasses[kIndirect] > 0) c.stats.setCount("photon_passes", double(photonPasses[kIndirect]) / FixedFilm::kScale);
     // The image is rank 0's; the others have nothing left to do that could fail.
     return me == 0 ? sum.average(passes) : Film();
@@ -139,9 +176,11 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs, PhotonStore* stor
         passes.replay(sum);
         return c.ranks.rank() == 0 ? sum.average(1) : Film();
     }
+    const FilmPass filmPass = passes.filmOnly() ? FilmPass([&](int pass, FixedFilm& sum) { return passes.renderFilm(pass, sum); })
+                                                : nullptr;
     return renderPasses(
         c, [&](const PassShare& share, FixedFilm& sum, const Deadline& deadline) { return passes.render(share, sum, deadline); },
-        passes.probing(), passes.nextSeconds());
+        passes.probing(), passes.nextSeconds(), filmPass, passes.eyeSeconds());
 }
 
 }  // namespace

@@ -272,10 +272,22 @@ EyePass SplatPasses::traceEye(int pass) {
     eye_.firstSample = pass * eye_.spp;
     eye_.firstDirectSample = pass * eye_.directSpp;
     EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
-    c_.stats.addTime("eye", t.seconds());
+    eyeSeconds_ = t.seconds();
+    c_.stats.addTime("eye", eyeSeconds_);
     c_.stats.setCount("eye_samples", double(eye.samples.size()));
     c_.stats.setCount("eye_samples_mb", double(eye.samples.bytes()) / kMB);
     return eye;
+}
+
+double SplatPasses::renderFilm(int pass, FixedFilm& sum) {
+    Timer t;
+    EyePassSettings film = eye_;
+    film.spp = 0;
+    film.firstDirectSample = pass * film.directSpp;
+    sum.add(traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, film, c_.pool, c_.reporter).film);
+    sum.countFilmPass(film.directSamples > 0);
+    c_.stats.addTime("film", t.seconds());
+    return t.seconds();
 }
 
 // The indirect photons' receivers' spacing in pass `pass` (0: none): a share of the smallest

@@ -61,6 +61,13 @@ public:
     // chooses the kernel scale (docs/design.md §9).
     void replay(FixedFilm& sum);
 
+    // Under a time limit, where no whole pass fits the time left: pass `pass`'s direct film
+    // alone into `sum` (no eye samples, photons or splat: docs/design.md §9). Returns its seconds.
+    double renderFilm(int pass, FixedFilm& sum);
+    bool filmOnly() const { return eye_.directSpp > 0; }
+    // The last pass's eye pass seconds (a film pass takes less).
+    const double* eyeSeconds() const { return &eyeSeconds_; }
+
     bool probing() const { return probing_; }
     // With a time limit, at rank 0, after the first pass: the seconds a later pass needs.
     const double* nextSeconds() const { return &nextPass_; }
@@ -88,6 +95,7 @@ private:
     bool replaying_ = false;
     int traced_ = 0;  // passes whose photons this render traced (stats: photon_passes_traced)
     double nextPass_ = 0.0;  // the probe's estimate of a later pass's seconds
+    double eyeSeconds_ = 0.0;
     Timer whole_;
 };
 

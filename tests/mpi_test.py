@@ -66,11 +66,13 @@ def test_time_limit_ranks_agree_on_the_passes():
     fixed = ("--kernel-scale", "1")
     with tempfile.TemporaryDirectory(prefix="raysplat_mpi_") as out:
         many, counts = render(out, "many", 2, cli.CORNELL, "--time-limit", "2", *fixed)
-        passes = int(counts["passes"])
+        passes, film = int(counts["passes"]), int(counts["film_passes"])
         cli.check(passes >= 2 and passes % 2 == 0, "2 ranks rendered %d passes: whole rounds of 2 expected" % passes)
-        one, _ = render(out, "one", 0, cli.CORNELL, "--passes", str(passes), *fixed)
+        cli.check(film % 2 == 0, "2 ranks rendered %d film passes: whole rounds of 2 expected" % film)
+        film_args = ("--film-passes", str(film)) if film else ()
+        one, _ = render(out, "one", 0, cli.CORNELL, "--passes", str(passes), *film_args, *fixed)
         _, measured = render(out, "measured", 2, cli.CORNELL, "--time-limit", "2")
-    cli.check(many == one, "the time-limited image differs from %d passes in one process" % passes)
+    cli.check(many == one, "the time-limited image differs from %d passes and %d film passes in one process" % (passes, film))
     shared = int(measured["passes"])
     cli.check(shared % 2 == 1, "2 ranks measuring the kernel scale rendered %d passes: 1 + whole rounds of 2 expected" % shared)
 
@@ -231,6 +233,7 @@ def main():
     tests = [
         ("splat: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--passes", "3")),
         ("splat: 1 pass shared by 3 ranks (the paper's estimator)", same_image(3, cli.GLOSSY, "--direct", "photons", "--passes", "1")),
+        ("splat: 2 passes and 3 film passes round 2 ranks", same_image(2, cli.CORNELL, "--passes", "2", "--film-passes", "3")),
         ("path: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--method", "path", "--passes", "3")),
         ("path: 1 pass's rows shared by 3 ranks", same_image(3, cli.GLOSSY, "--method", "path")),
         ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),

@@ -474,6 +474,32 @@ TEST(TimeLimit, APassCutShortKeepsAnUnbiasedShareOfItsPhotons) {
     EXPECT_NEAR(ratio, 1.0, 0.04);
 }
 
+// Passes of the direct film alone (--film-passes; what a time limit's leftover time goes to): the
+// film's layers are those of as many whole passes, the photons' those of the whole passes alone,
+// both to the bit, since film pass p takes the direct film samples whole pass p would.
+TEST(FilmPasses, AddTheDirectFilmOfWholePassesAndNoPhotons) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    const Scene scene = loadScene(std::string(data) + "/cornell_box.gltf", silentReporter());
+    RenderConfig cfg = splatConfig(24);
+    cfg.photons = 4000;
+    cfg.kernelScale = 1.f;
+    cfg.passes = 2;
+    const RenderResult two = render(scene, cfg, silentReporter());
+    cfg.filmPasses = 2;
+    const RenderResult film = render(scene, cfg, silentReporter());
+    cfg.filmPasses = 0;
+    cfg.passes = 4;
+    const RenderResult four = render(scene, cfg, silentReporter());
+    EXPECT_EQ(film.stats.count("film_passes"), 2.0);
+    EXPECT_EQ(film.stats.count("passes"), 2.0);
+    for (int l : {kDirect, kEmission}) EXPECT_EQ(film.film.layers[l], four.film.layers[l]) << layerName(l);
+    EXPECT_EQ(film.film.albedo, four.film.albedo);
+    EXPECT_EQ(film.film.normal, four.film.normal);
+    for (int l : {kIndirect, kCaustic}) EXPECT_EQ(film.film.layers[l], two.film.layers[l]) << layerName(l);
+    EXPECT_NE(film.film.layers[kDirect], two.film.layers[kDirect]);
+}
+
 // A walkthrough's photon store (docs/design.md §12): photons traced for one camera and splatted
 // into another's frame give that frame bit for bit the image its own render gives, with the
 // coverage measured for every photon where the splat measures it only for those it needs; the

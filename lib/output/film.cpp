@@ -68,10 +68,16 @@ void FixedFilm::countPhotonPass(const double share[3]) {
     for (int c = 0; c < 3; ++c) photonPasses[c] += std::llround(std::clamp(share[c], 0.0, 1.0) * kScale);
 }
 
+void FixedFilm::countFilmPass(bool directInFilm) {
+    ++filmPasses;
+    if (directInFilm) photonPasses[kDirect] += int64_t(kScale);
+}
+
 Film FixedFilm::average(int passes) const {
     Film film(width, height);
     for (int b = 0; b < kBuffers; ++b) {
-        const double scale = 1.0 / (b < 3 && photonPasses[b] > 0 ? double(photonPasses[b]) : kScale * double(std::max(passes, 1)));
+        const double scale = 1.0 / (b < 3 && photonPasses[b] > 0 ? double(photonPasses[b])
+                                                                 : kScale * double(std::max<int64_t>(passes + filmPasses, 1)));
         std::vector<Vec3>& to = film.buffer(b);
         const int64_t* from = buffers[b].data();
         for (size_t i = 0; i < to.size(); ++i)

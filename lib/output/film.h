@@ -43,18 +43,24 @@ struct FixedFilm {
     // photons it splatted (fixed point; a pass cut short by a time limit counts its share). No
     // pass counted: the layers are averaged over the passes, as the others.
     int64_t photonPasses[3] = {0, 0, 0};
+    // Passes of the eye film alone (the direct film's samples, no photons: docs/design.md §9),
+    // beside the whole passes: the buffers no photon class counts are averaged over both.
+    int64_t filmPasses = 0;
 
     FixedFilm() = default;
     FixedFilm(int w, int h);
     // Counts a pass that splatted `share[c]` (0..1] of each photon class's light.
     void countPhotonPass(const double share[3]);
+    // Counts a pass of the eye film alone; `directInFilm`: the direct layer is the film's (light
+    // sampling, no direct photons), and counts it too.
+    void countFilmPass(bool directInFilm);
     size_t pixelCount() const { return size_t(width) * height; }
     static int64_t toFixed(float v);
     static void addSaturating(int64_t& sum, int64_t v);
     void add(const FixedFilm& other);  // its buffers that it holds (all, or a splat's layers)
     void add(const Film& film);  // every buffer of `film`, pixelwise
     // The average of `passes` passes, as a float film (the photon layers over their counted
-    // passes, where counted).
+    // passes, where counted; the others over `passes` and the film passes).
     Film average(int passes) const;
 };
 
