@@ -65,7 +65,7 @@ struct Traced {
 // that a path that can no longer produce one stops early.
 void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const ScrambledHalton& qmc,
                const PhotonSettings& st, uint64_t n, const bool open[kPhotonClassCount], std::vector<PhotonRay>& out) {
-    auto u = [&](int dim) { return qmc.sample(n, dim); };
+    auto u = [&](int dim) { return qmc.sample(n - st.firstPath, dim); };
     EmissionSample e = lights.sampleEmission(u(0), {u(1), u(2)}, {u(3), u(4)});
     if (!(e.choiceProb > 0.f) || isBlack(e.flux)) return;
 
@@ -191,7 +191,12 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
                        ThreadPool& pool, Reporter& reporter) {
     PhotonMap map;
     if (lights.empty() || st.photons <= 0) return map;
-    ScrambledHalton qmc(st.seed, 5 + kDimsPerBounce * st.maxDepth);
+    // Each pass its own scrambling of the sequence, indexed by the path within the pass: the
+    // radical inverse runs over an index's own digits (about 17 in base 2 for a pass's paths, 41
+    // for the pass · 2^40 + path of one sequence shared by the passes), and it was a tenth of a
+    // point-lit render.
+    ScrambledHalton qmc(hashKey(st.seed, Stage::Photon, st.firstPath >> PhotonSettings::kPathsPerPassBits, 0x9a55),
+                        5 + kDimsPerBounce * st.maxDepth);
 
     // Quotas.
     int64_t quota[kPhotonClassCount];
