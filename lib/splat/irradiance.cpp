@@ -85,16 +85,15 @@ private:
     std::vector<uint32_t> chosen_;
 };
 
-// The receivers' cells: their slots sorted by cell, and a table from a cell's key to its run.
+// The receivers' cells: a table from a cell's key to its run of slots (the slots come in the
+// order of their cells).
 void indexCells(IrradianceReceivers& r) {
     const float invCell = 0.5f / r.spacing;
     std::vector<std::pair<uint64_t, uint32_t>> keyed(r.irradianceSlots);
     for (uint32_t s = 0; s < r.irradianceSlots; ++s) keyed[s] = {cellOf(r.position[s], invCell), s};
-    std::sort(keyed.begin(), keyed.end());
-    r.cellSlots.resize(keyed.size());
     size_t runs = 0;
     for (size_t k = 0; k < keyed.size(); ++k) {
-        r.cellSlots[k] = keyed[k].second;
+        RS_CHECK(k == 0 || keyed[k].first >= keyed[k - 1].first);
         runs += k == 0 || keyed[k].first != keyed[k - 1].first;
     }
     const size_t size = tableSizeFor(runs);
@@ -135,22 +134,8 @@ inline int64_t fixedOf(double v, double scale) {
 
 }  // namespace
 
-float receiverWeight(const Vec3& sample, const Vec3& sampleNormal, const Vec3& sampleGeomNormal, const Vec3& receiver,
-                     uint16_t receiverNormal16, uint16_t receiverGeomNormal16, float spacing) {
-    const Vec3 d = receiver - sample;
-    const float s2 = spacing * spacing, d2 = glm::dot(d, d);
-    if (!(d2 < s2)) return 0.f;
-    const Vec3 receiverNormal = decodeUnit16(receiverNormal16), receiverGeomNormal = decodeUnit16(receiverGeomNormal16);
-    if (glm::dot(sampleNormal, receiverNormal) < IrradianceSettings::kMinNormalCos) return 0.f;
-    if (!(glm::dot(sampleGeomNormal, receiverGeomNormal) > 0.f)) return 0.f;
-    const float plane = IrradianceSettings::kMaxPlaneOffset * spacing;
-    if (std::abs(glm::dot(d, sampleGeomNormal)) > plane || std::abs(glm::dot(d, receiverGeomNormal)) > plane) return 0.f;
-    const float x = 1.f - d2 / s2;
-    return x * x;
-}
-
 size_t IrradianceReceivers::bytes() const {
-    return samples.bytes() + glossyPixel.size() * 4 + position.size() * 16 + tableKey.size() * 16 + cellSlots.size() * 4;
+    return samples.bytes() + glossyPixel.size() * 4 + position.size() * 16 + tableKey.size() * 16;
 }
 
 IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int height, float spacing, ThreadPool& pool) {
@@ -166,7 +151,7 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
     }
     for (size_t p = 0; p < pixels; ++p) start[p + 1] += start[p];
 
-    // Each tile chooses its own, in parallel; the slots follow the tiles' order.
+    // Each tile chooses its own, in parallel.
     const int tile = IrradianceSettings::kTile;
     const int tilesX = (width + tile - 1) / tile, tilesY = (height + tile - 1) / tile;
     std::vector<std::vector<uint32_t>> chosen(size_t(tilesX) * tilesY);
@@ -205,8 +190,18 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
         out.samples.pixel.push_back(uint32_t(out.samples.pixel.size()));
         out.samples.bsdf.push_back(bsdf);
     };
+    // Slots in the order of their cells (then the tiles'), so that the gather reads each cell's
+    // receivers from one run of the arrays.
+    const float invCell = 0.5f / spacing;
+    std::vector<std::pair<uint64_t, uint32_t>> byCell;  // (cell, tile-order slot)
+    std::vector<uint32_t> sampleOf;
     for (const auto& c : chosen)
-        for (uint32_t i : c) copy(i, white);
+        for (uint32_t i : c) {
+            byCell.emplace_back(cellOf(samples.position[i], invCell), uint32_t(sampleOf.size()));
+            sampleOf.push_back(i);
+        }
+    std::sort(byCell.begin(), byCell.end());
+    for (const auto& [cell, slot] : byCell) copy(sampleOf[slot], white);
     out.irradianceSlots = uint32_t(out.samples.size());
     out.position = out.samples.position;
     out.normal = out.samples.normal;
@@ -240,8 +235,7 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples, c
             for (int k = 0; k < 8; ++k) {
                 uint32_t begin, end;
                 cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
-                for (uint32_t j = begin; j < end; ++j) {
-                    const uint32_t s = r.cellSlots[j];
+                for (uint32_t s = begin; s < end; ++s) {
                     const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
                     if (w <= 0.f) continue;
                     weights += w;

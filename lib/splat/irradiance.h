@@ -24,6 +24,7 @@
 // World space, metres. Deterministic: nothing depends on threads.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -55,9 +56,9 @@ struct IrradianceReceivers {
     std::vector<Vec3> position;
     std::vector<uint16_t> normal, geomNormal;
     // Cells of 2 × spacing: an open-addressing table of cell keys, each with its run of slots
-    // in cellSlots.
+    // (the irradiance slots are in the order of their cells).
     std::vector<uint64_t> tableKey;
-    std::vector<uint32_t> tableBegin, tableEnd, cellSlots;
+    std::vector<uint32_t> tableBegin, tableEnd;
 
     size_t slots() const { return samples.size(); }
     size_t bytes() const;
@@ -77,7 +78,19 @@ void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& sa
 // spacing s on the same surface (IrradianceSettings). The choice and the gather ask the same.
 // The receiver's normals come encoded (EyeSamples): most receivers asked lie past the spacing,
 // and are refused before their normals are decoded.
-float receiverWeight(const Vec3& sample, const Vec3& sampleNormal, const Vec3& sampleGeomNormal, const Vec3& receiver,
-                     uint16_t receiverNormal, uint16_t receiverGeomNormal, float spacing);
+// Inline: the gather asks it for every receiver in the eight cells around each eye sample.
+inline float receiverWeight(const Vec3& sample, const Vec3& sampleNormal, const Vec3& sampleGeomNormal, const Vec3& receiver,
+                            uint16_t receiverNormal16, uint16_t receiverGeomNormal16, float spacing) {
+    const Vec3 d = receiver - sample;
+    const float s2 = spacing * spacing, d2 = glm::dot(d, d);
+    if (!(d2 < s2)) return 0.f;
+    const Vec3 receiverNormal = decodeUnit16(receiverNormal16), receiverGeomNormal = decodeUnit16(receiverGeomNormal16);
+    if (glm::dot(sampleNormal, receiverNormal) < IrradianceSettings::kMinNormalCos) return 0.f;
+    if (!(glm::dot(sampleGeomNormal, receiverGeomNormal) > 0.f)) return 0.f;
+    const float plane = IrradianceSettings::kMaxPlaneOffset * spacing;
+    if (std::abs(glm::dot(d, sampleGeomNormal)) > plane || std::abs(glm::dot(d, receiverGeomNormal)) > plane) return 0.f;
+    const float x = 1.f - d2 / s2;
+    return x * x;
+}
 
 }  // namespace rs
