@@ -73,6 +73,46 @@ TEST(PhotonTracer, ClosedRoomConservesEnergy) {
     EXPECT_EQ(map.count[kPhotonDirect] + map.count[kPhotonIndirect], st.photons);
 }
 
+// A point light outside the scene's bounds sends its photons only towards them (a half of the
+// sphere for each axis it lies outside along), each with the flux of that narrower pdf: the
+// direct photons on a floor carry I·Ω, Ω the floor's solid angle seen from the light, summed
+// here cell by cell, for a light above the floor and for one above and beside it.
+TEST(PhotonTracer, PointLightOutsideTheBoundsSendsTheFloorItsLight) {
+    for (const Vec3 at : {Vec3(0.3f, 1.5f, 0.2f), Vec3(2.5f, 1.5f, 0.2f)}) {
+        Scene s;
+        addQuad(s, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, {-2, 0, -2}, addMaterial(s, MaterialKind::Lambert, Vec3(0.5f)));
+        PunctualLight light;
+        light.position = at;
+        light.intensity = Vec3(3.f);
+        s.lights.push_back(light);
+        s.computeBounds();
+        RayAccel accel(s, 1);
+        LightSampler lights(s);
+        ThreadPool pool(2);
+        PhotonSettings st;
+        st.photons = 40000;
+        st.split = {1.f, 0.f, 0.f};
+        const PhotonMap map = tracePhotons(s, accel, lights, st, pool, silentReporter());
+        double flux = 0.0;
+        for (const PhotonRay& r : map.rays) flux += r.cls == kPhotonDirect ? double(r.flux.x) : 0.0;
+        const int n = 1000;
+        double omega = 0.0;  // ∫ cos θ / r² dA over the floor
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                const DVec3 d = DVec3(-2.0 + 4.0 * (i + 0.5) / n, 0.0, -2.0 + 4.0 * (j + 0.5) / n) - DVec3(at);
+                const double r2 = glm::dot(d, d);
+                omega += (-d.y / std::sqrt(r2)) / r2 * (16.0 / (double(n) * n));
+            }
+        EXPECT_NEAR(flux / (3.0 * omega), 1.0, 0.01) << "light at " << at.x;
+        EXPECT_EQ(map.count[kPhotonDirect], st.photons);
+        // The paths the floor's photons took: each lands with the share of the allowed directions
+        // the floor takes, Ω over 2π above the floor, over π above and beside it.
+        const double allowed = at.x > 2.f ? kPi : 2.0 * kPi;
+        EXPECT_NEAR(double(map.pathsFor[kPhotonDirect]) * omega / allowed / st.photons, 1.0, 0.02)
+            << "paths sent away from the floor, light at " << at.x;
+    }
+}
+
 TEST(PhotonTracer, GlassBallMakesCausticsAndQuotasHold) {
     Scene s = closedRoom(0.5f, true);
     RayAccel accel(s, 1);

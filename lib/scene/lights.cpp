@@ -35,7 +35,11 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         float power = l.power(luminance(l.intensity), sceneRadius_);
         const float area = l.type == LightType::Directional ? portalArea(l.direction) : 0.f;
         if (area > 0.f) power = luminance(l.intensity) * area;
-        if (power > 0.f) entries_.push_back({Kind::Punctual, uint32_t(i), power});
+        if (!(power > 0.f)) continue;
+        entries_.push_back({Kind::Punctual, uint32_t(i), power});
+        // Photons of a point light that leave away from the scene's bounds meet nothing.
+        for (int a = 0; a < 3 && l.type == LightType::Point && !scene.bounds.empty(); ++a)
+            entries_.back().toward[a] = l.position[a] > scene.bounds.hi[a] ? -1 : l.position[a] < scene.bounds.lo[a] ? 1 : 0;
     }
     if (environment && !environment->black()) {
         environment_ = environment;
@@ -300,8 +304,15 @@ EmissionSample LightSampler::sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir)
         case LightType::Spot: {
             s.origin = l.position;
             if (l.type == LightType::Point) {
+                // Uniform over the directions towards the bounds' side along each axis the light
+                // lies outside of: a half of the sphere for each such axis.
                 s.dir = sampleUniformSphere(uDir);
                 s.pdfDir = 1.f / (4.f * kPi);
+                for (int a = 0; a < 3; ++a) {
+                    if (!e.toward[a]) continue;
+                    s.dir[a] = float(e.toward[a]) * std::abs(s.dir[a]);
+                    s.pdfDir *= 2.f;
+                }
             } else {
                 s.dir = Frame(l.direction).toWorld(sampleUniformCone(uDir, l.cosOuter));
                 s.pdfDir = 1.f / (2.f * kPi * (1.f - l.cosOuter));

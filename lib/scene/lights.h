@@ -64,6 +64,9 @@ private:
         // A textured emitter's texel grid (cellCdf_[gridFirst, gridFirst + gridSide²)); side 0:
         // points uniform over the triangle.
         uint32_t gridSide = 0, gridFirst = 0;
+        // A point light outside the scene's bounds along an axis sends photons only towards them
+        // along it: per axis, 0 free, +1 or −1 the sign the direction's component must have.
+        int8_t toward[3] = {0, 0, 0};
     };
     // A textured emitter's points follow its texels: a grid of cells over the unit square that
     // sampleUniformTriangle maps onto the triangle (preserving area), each cell chosen by the
