@@ -5,7 +5,7 @@
 namespace rs {
 
 Vec3 sampleLightDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
-                       const Vec3& wo, float uChoice, Vec2 u) {
+                       const Vec3& wo, float uChoice, Vec2 u, bool mis) {
     LightSample ls = lights.sampleLi(sp.p, uChoice, u);
     if (!(ls.pdf > 0.f) || isBlack(ls.radiance)) return Vec3(0.f);
     Vec3 f = bsdf.eval(wo, ls.wi);
@@ -18,7 +18,7 @@ Vec3 sampleLightDirect(const RayAccel& accel, const LightSampler& lights, const 
     bool visible = std::isfinite(ls.dist) ? !accel.occluded(origin, sp.p + ls.wi * ls.dist - origin, 1.f - 1e-4f)
                                           : !accel.occluded(origin, ls.wi, kInf);
     if (!visible) return Vec3(0.f);
-    float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, bsdf.pdf(wo, ls.wi));
+    float w = ls.delta || !mis ? 1.f : powerHeuristic(ls.pdf, bsdf.pdf(wo, ls.wi));
     return f * ls.radiance * (cosI * w / ls.pdf);
 }
 
@@ -40,15 +40,15 @@ template <class LightNumbers>
 Vec3 directSamples(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
                    const Vec3& wo, int n, Sampler& sampler, LightNumbers&& lightNumbers) {
     const Scene& scene = accel.scene();
+    const bool mis = lights.wantsBsdfSamples(sp.p, bsdf.hasGlossyLobe());
     Vec3 sum(0.f);
     for (int k = 0; k < n; ++k) {
         float uChoice;
         Vec2 u;
         lightNumbers(k, uChoice, u);
-        sum += sampleLightDirect(accel, lights, sp, bsdf, wo, std::min(uChoice, 0x1.fffffep-1f), u);
-        // BSDF sampling: emitted light met first by the sampled ray (none to meet under punctual
-        // lights alone, whose light samples then take the whole weight).
-        if (lights.onlyPunctual()) continue;
+        sum += sampleLightDirect(accel, lights, sp, bsdf, wo, std::min(uChoice, 0x1.fffffep-1f), u, mis);
+        // BSDF sampling: emitted light met first by the sampled ray, where it is wanted.
+        if (!mis) continue;
         float uLobe = sampler.get1D();
         BsdfSample bs = bsdf.sample(wo, uLobe, sampler.get2D(), Transport::Radiance);
         if (!(bs.pdf > 0.f) || isBlack(bs.weight) || bs.delta) continue;

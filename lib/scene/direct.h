@@ -15,9 +15,10 @@
 namespace rs {
 
 // One light sample from `sp`: f · Li · |cos| / pdf, MIS-weighted against BSDF sampling for
-// area lights, 0 when shadowed. uChoice picks the light, u the point on it.
+// area lights (`mis`; without it the light samples take the whole weight), 0 when shadowed.
+// uChoice picks the light, u the point on it.
 Vec3 sampleLightDirect(const RayAccel& accel, const LightSampler& lights, const SurfacePoint& sp, const Bsdf& bsdf,
-                       const Vec3& wo, float uChoice, Vec2 u);
+                       const Vec3& wo, float uChoice, Vec2 u, bool mis = true);
 
 // The MIS weight of emitted light found by a BSDF-sampled ray from `from` (solid-angle pdf
 // `bsdfPdf`) hitting the emitter at `hit`: the other half of sampleLightDirect's weight.

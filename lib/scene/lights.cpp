@@ -59,6 +59,13 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         entries_.push_back({Kind::Environment, 0, power});
     }
     onlyPunctual_ = std::all_of(entries_.begin(), entries_.end(), [](const Entry& e) { return e.kind == Kind::Punctual; });
+    for (const Entry& e : entries_) {
+        if (e.kind != Kind::Area) continue;
+        const Vec3* v = &scene.positions[3 * e.index];
+        const Vec3 c = (v[0] + v[1] + v[2]) / 3.f;
+        const float reach = std::sqrt(std::max({glm::dot(v[0] - c, v[0] - c), glm::dot(v[1] - c, v[1] - c), glm::dot(v[2] - c, v[2] - c)}));
+        emitterSpheres_.emplace_back(c, kNearEmitter * reach);
+    }
     double total = 0.0;
     for (const Entry& e : entries_) total += e.power;
     double acc = 0.0;
@@ -176,6 +183,16 @@ float LightSampler::withinChoice(float u) const {
     const size_t i = choose(u, prob);
     const float lo = i ? cdf_[i - 1] : 0.f;
     return prob > 0.f ? std::clamp((u - lo) / prob, 0.f, 0x1.fffffep-1f) : 0.f;
+}
+
+bool LightSampler::wantsBsdfSamples(const Vec3& p, bool glossy) const {
+    if (onlyPunctual_) return false;
+    if (glossy || environment_ || emitterSpheres_.size() > kMaxNearTests) return true;
+    for (const glm::vec4& s : emitterSpheres_) {
+        const Vec3 d = p - Vec3(s);
+        if (glm::dot(d, d) < s.w * s.w) return true;
+    }
+    return false;
 }
 
 LightSample LightSampler::sampleLi(const Vec3& p, float uChoice, Vec2 u) const {
