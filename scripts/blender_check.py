@@ -25,6 +25,7 @@ exists, else the Python running this script; the script re-executes itself under
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -68,22 +69,30 @@ def reexec_under_bpy_python(script=__file__):
         sys.exit(FAIL if explicit or os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1" else SKIP)
 
 
-def begin_check(name):
+_temporary = []  # begin_check's work folders, removed by exit_without_teardown
+
+
+def begin_check(name, binary=None, keep=None):
     """What a check of raysplat through bpy starts with, run under the bpy interpreter: bpy
-    imported (SKIP where it cannot be, FAIL with RAYSPLAT_REQUIRE_BLENDER=1), the binary from
-    $RAYSPLAT, a Checks and a temporary work folder. Returns (bpy, binary, checks, work), or
-    the exit code where the check cannot run."""
+    imported (SKIP where it cannot be, FAIL with RAYSPLAT_REQUIRE_BLENDER=1), the binary
+    (`binary`, else $RAYSPLAT), a Checks and a work folder (`keep`, else a temporary one).
+    Returns (bpy, binary, checks, work), or the exit code where the check cannot run."""
     required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
     try:
         import bpy
     except Exception as e:  # ImportError, or a bpy built for another Python
         print(f"{name}: {'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e})", flush=True)
         return FAIL if required else SKIP
-    binary = os.environ.get("RAYSPLAT")
+    binary = binary or os.environ.get("RAYSPLAT")
     if not binary:
         print(f"{name}: FAIL: set $RAYSPLAT to the raysplat binary", flush=True)
         return FAIL
-    return bpy, binary, Checks(), Path(tempfile.mkdtemp(prefix=name + "-"))
+    if keep:
+        Path(keep).mkdir(parents=True, exist_ok=True)
+    else:
+        keep = tempfile.mkdtemp(prefix=name + "-")
+        _temporary.append(keep)
+    return bpy, binary, Checks(), Path(keep)
 
 
 def parse_args():
@@ -128,7 +137,10 @@ class Checks:
 
 def exit_without_teardown(status):
     """Exits with `status` at once: bpy 4.2 segfaults while the interpreter shuts down after a
-    glTF import (exit 139 after a PASS), so the teardown is skipped."""
+    glTF import (exit 139 after a PASS), so the teardown is skipped; begin_check's temporary
+    work folders are removed first."""
+    for folder in _temporary:
+        shutil.rmtree(folder, ignore_errors=True)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(status)

@@ -55,11 +55,10 @@ import os
 import struct
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from blender_check import FAIL, ROOT, SKIP, Checks, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
+from blender_check import FAIL, ROOT, begin_check, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
 
 MEAN_TOLERANCE = 0.03
 BLOCK_BIAS = 0.04  # RMS relative difference of the block means allowed besides noise (docstring)
@@ -206,20 +205,12 @@ def parse_args():
 def main():
     reexec_under_bpy_python(__file__)
     a = parse_args()
-    try:
-        import bpy
-        import images
-        import studyutil
-    except Exception as e:
-        required = os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1"
-        say(f"{'FAIL' if required else 'SKIP'}: cannot import bpy with {sys.executable} ({e})")
-        return FAIL if required else SKIP
-    if not a.raysplat:
-        say("FAIL: give --raysplat or set $RAYSPLAT")
-        return FAIL
-    tmp = tempfile.TemporaryDirectory()
-    work = Path(a.keep or tmp.name)
-    work.mkdir(parents=True, exist_ok=True)
+    begun = begin_check("blender_cycles_check", a.raysplat, a.keep)
+    if isinstance(begun, int):
+        return begun
+    bpy, a.raysplat, c, work = begun
+    import images
+    import studyutil
     scene_path = Path(a.scene).resolve()
     doc = gltf_document(scene_path)
     cam = (doc.get("cameras") or [{}])[0]
@@ -227,7 +218,6 @@ def main():
     width, height = a.width, max(1, round(a.width / aspect))
     say(f"Blender {bpy.app.version_string}: {scene_path.name} at {width}×{height}, Cycles {a.samples} samples a half")
 
-    c = Checks()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     result = bpy.ops.import_scene.gltf(filepath=str(scene_path), export_import_convert_lighting_mode="COMPAT")
     c.check("FINISHED" in result, f"Blender's glTF importer reads {scene_path.name}")

@@ -20,22 +20,17 @@ import math
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import blender_check  # noqa: E402
-from blender_check import FAIL, SKIP, Checks, exit_without_teardown  # noqa: E402
+from blender_check import exit_without_teardown  # noqa: E402
 
 W, H = 64, 32
 ROTATION = 30.0  # degrees
 # Directions in Blender's frame (Z up), none on a pixel's border.
 DIRECTIONS = {"east": (1.0, 0.13, 0.07), "north": (0.11, 1.0, 0.05), "west": (-1.0, -0.21, 0.12),
               "south": (0.17, -1.0, -0.09), "high": (0.3, -0.5, 0.8), "low": (-0.52, 0.34, -0.6)}
-
-
-def say(msg):
-    print(f"blender_env_check: {msg}", flush=True)
 
 
 def make_image(path):
@@ -105,23 +100,15 @@ def main():
     p.add_argument("--raysplat", default=os.environ.get("RAYSPLAT"), help="the raysplat binary (default $RAYSPLAT)")
     p.add_argument("--keep", help="keep the files in this directory")
     a = p.parse_args()
-    try:
-        import bpy
-    except ImportError as e:
-        say(f"cannot import bpy: {e}")
-        return FAIL if os.environ.get("RAYSPLAT_REQUIRE_BLENDER") == "1" else SKIP
-    if not a.raysplat:
-        say("no raysplat binary: give --raysplat or set $RAYSPLAT")
-        return FAIL
-    tmp = tempfile.TemporaryDirectory()
-    work = Path(a.keep or tmp.name)
-    work.mkdir(parents=True, exist_ok=True)
+    begun = blender_check.begin_check("blender_env_check", a.raysplat, a.keep)
+    if isinstance(begun, int):
+        return begun
+    bpy, a.raysplat, c, work = begun
     image_path = work / "uv.exr"
     make_image(image_path)
     scene, mapping = setup_scene(bpy, image_path)
     glb = work / "cameras.glb"
     bpy.ops.export_scene.gltf(filepath=str(glb), export_format="GLB", export_cameras=True)
-    c = Checks()
     for rotation in (0.0, ROTATION):
         mapping.inputs["Rotation"].default_value[2] = math.radians(rotation)
         for name in DIRECTIONS:
