@@ -401,6 +401,21 @@ def quad_node(g, name, geom, material, **fields):
     return g.node(name, mesh=g.mesh(name, geom, material), **fields)
 
 
+def plant_leaves(g, leaf, x, z, y0, reach, lift, width):
+    """Ten quads of material `leaf` around a stem at (x, z), a golden angle apart, from y0 up
+    by 5 cm each: each reaches `reach` out from the stem, tilted up by `lift`, `width` wide."""
+    uvs = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)]
+    for i in range(10):
+        angle = i * 2.399963  # golden angle
+        y = y0 + 0.05 * i
+        out = (math.cos(angle), 0.0, math.sin(angle))
+        side = (-math.sin(angle), 0.0, math.cos(angle))
+        tilt = normalize(add(out, (0.0, lift, 0.0)))
+        centre = (x + reach * out[0], y, z + reach * out[2])
+        geom = rect(centre, mul(tilt, reach), mul(side, width), cross(tilt, side))
+        g.node("leaf_%d" % i, mesh=g.mesh("leaf_%d" % i, geom, leaf, uvs=uvs))
+
+
 def png_rgba(width, height, pixel):
     """PNG bytes of an 8-bit RGBA image; pixel(x, y) gives (r, g, b, a) in 0..255."""
     import zlib

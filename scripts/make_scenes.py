@@ -43,8 +43,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from gltf_builder import (X, Y, Z, GltfBuilder, add, box_maker, cross, dot, f32, icosahedron, leaf_png,  # noqa: E402
-                          merge, mul, normalize, quad_node, quat_axis_angle, quat_between, quat_mul, rect, sub,
+from gltf_builder import (X, Y, Z, GltfBuilder, box_maker, cross, dot, f32, icosahedron, leaf_png,  # noqa: E402
+                          merge, mul, normalize, plant_leaves, quad_node, quat_axis_angle, quat_between, quat_mul, rect, sub,
                           unit_cube, uv_sphere, vec)
 
 
@@ -564,16 +564,7 @@ def daylight(outdir):
     px, pz = -1.55, -1.05
     box("pot", clay, (px - 0.14, 0, pz - 0.14), (px + 0.14, 0.3, pz + 0.14))
     box("stem", wood, (px - 0.01, 0.3, pz - 0.01), (px + 0.01, 1.15, pz + 0.01))
-    leaf_uvs = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)]
-    for i in range(10):
-        angle = i * 2.399963  # golden angle
-        y = 0.65 + 0.05 * i
-        out = (math.cos(angle), 0.0, math.sin(angle))
-        side = (-math.sin(angle), 0.0, math.cos(angle))
-        tilt = normalize(add(out, (0.0, 0.35, 0.0)))
-        centre = (px + 0.16 * out[0], y, pz + 0.16 * out[2])
-        geom = rect(centre, mul(tilt, 0.16), mul(side, 0.07), cross(tilt, side))
-        g.node("leaf_%d" % i, mesh=g.mesh("leaf_%d" % i, geom, leaf, uvs=leaf_uvs))
+    plant_leaves(g, leaf, px, pz, 0.65, 0.16, 0.35, 0.07)
     g.directional_light("sun", (0.8, -0.5, -0.25), 30.0, color=(1.0, 0.93, 0.82))
     g.camera("camera", eye=(2.1, 1.45, 1.75), target=(-1.2, 0.7, -1.0), yfov=1.0, aspect=1.333)
     g.write_gltf(os.path.join(outdir, "daylight.gltf"))

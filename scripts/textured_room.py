@@ -21,8 +21,8 @@ are 64-128 px PNGs in the .bin; the file stays under 100 kB.
 
 import math
 
-from gltf_builder import (X, Y, Z, GltfBuilder, add, box_maker, cross, leaf_png, mul, normalize,
-                          png_rgba, quad_node, rect, uv_sphere)
+from gltf_builder import (X, Y, Z, GltfBuilder, box_maker, leaf_png, mul, normalize,
+                          png_rgba, plant_leaves, quad_node, rect, uv_sphere)
 
 ROOM_X, ROOM_H, ROOM_Z = 2.0, 2.6, 2.0  # x, z in [-ROOM_X, ROOM_X] x [-ROOM_Z, ROOM_Z]
 
@@ -167,16 +167,7 @@ def plant(g, box, x, z):
     m["doubleSided"] = True
     box("pot", clay, (x - 0.14, 0, z - 0.14), (x + 0.14, 0.3, z + 0.14))
     box("stem", stem, (x - 0.01, 0.3, z - 0.01), (x + 0.01, 1.25, z + 0.01))
-    uvs = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)]
-    for i in range(10):
-        angle = i * 2.399963  # golden angle
-        y = 0.75 + 0.05 * i
-        out = (math.cos(angle), 0.0, math.sin(angle))
-        side = (-math.sin(angle), 0.0, math.cos(angle))
-        tilt = normalize(add(out, (0.0, 0.3, 0.0)))
-        centre = (x + 0.2 * out[0], y, z + 0.2 * out[2])
-        geom = rect(centre, mul(tilt, 0.2), mul(side, 0.09), cross(tilt, side))
-        g.node("leaf_%d" % i, mesh=g.mesh("leaf_%d" % i, geom, leaf, uvs=uvs))
+    plant_leaves(g, leaf, x, z, 0.75, 0.2, 0.3, 0.09)
 
 
 def textured_room(path):
