@@ -193,8 +193,7 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
     if (lights.empty() || st.photons <= 0) return map;
     // Each pass its own scrambling of the sequence, indexed by the path within the pass: the
     // radical inverse runs over an index's own digits (about 17 in base 2 for a pass's paths, 41
-    // for the pass · 2^40 + path of one sequence shared by the passes), and it was a tenth of a
-    // point-lit render.
+    // for pass · 2^40 + path), and under a point light it is a tenth of the render's profile.
     ScrambledHalton qmc(hashKey(st.seed, Stage::Photon, st.firstPath >> PhotonSettings::kPathsPerPassBits, 0x9a55),
                         5 + kDimsPerBounce * st.maxDepth);
 
