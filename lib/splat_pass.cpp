@@ -128,31 +128,43 @@ public:
     float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
               const std::function<bool()>& timeUp, uint64_t& covered) {
         const size_t quarter = indirect.rays.size() / KernelScaleProbe::kShare;
-        std::vector<int64_t> halves(4 * values_);  // A, B, C, D: the indirect layer of each
-        std::vector<int64_t> mine[2];              // this rank's light of the quarter at 1 and at ½
-        FixedFilm part;  // the splat's layers only
-        part.width = c_.width, part.height = c_.height;
-        for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
-        double seconds[2];  // the quarter's splat at 1 and at ½
+        FixedFilm parts[4];  // A, B, C, D: their indirect layer only
+        std::vector<int64_t> slots[4];
+        double seconds[2];  // the quarter's splat at 1 and at ½, before the gathers
         for (int f = 0; f < 2; ++f) {
             Timer t;
             const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps);
-            mine[f].assign(values_, 0);
             for (int h = 0; h < 2; ++h) {
-                splatInto(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), part, f == 0);
-                std::copy(part.buffers[kIndirect].begin(), part.buffers[kIndirect].end(), halves.begin() + (2 * f + h) * values_);
-                for (size_t i = 0; i < values_; ++i) mine[f][i] += part.buffers[kIndirect][i];
+                FixedFilm& part = parts[2 * f + h];
+                part.width = c_.width, part.height = c_.height;
+                part.buffers[kIndirect].assign(values_, 0);
+                targets_.land(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), splat_, part,
+                              slots[2 * f + h], f == 0 ? &totals_.splat : nullptr, f == 0 ? &totals_.coverage : nullptr);
             }
             seconds[f] = t.seconds();
         }
-        c_.ranks.sumAtRoot(halves);
-        double scale = c_.ranks.rank() == 0 ? choose(halves, seconds, whole, other) : 1.0;
+        // The receivers searched once for B, C and D; A's gather alone is timed as a pass's.
+        Timer gathering;
+        targets_.gather({&slots[0]}, {&parts[0]}, splat_);
+        const double gather = gathering.seconds();
+        targets_.gather({&slots[1], &slots[2], &slots[3]}, {&parts[1], &parts[2], &parts[3]}, splat_);
+        std::vector<int64_t> mine[2];  // this rank's light of the quarter at 1 and at ½
+        for (int j = 0; j < 4; ++j) {
+            std::vector<int64_t>& light = parts[j].buffers[kIndirect];
+            mine[j / 2].resize(values_);
+            for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
+            c_.ranks.sumAtRoot(light);
+        }
+        double scale = c_.ranks.rank() == 0 ? choose(parts, seconds, gather, whole, other) : 1.0;
         c_.ranks.broadcast(&scale, 1);
         const float m = float(scale);
+        for (int j = 0; j < 4; ++j) std::vector<int64_t>().swap(parts[j].buffers[kIndirect]), std::vector<int64_t>().swap(slots[j]);
         std::vector<int64_t>& light = sum.buffers[kIndirect];
         const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
         for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
-        for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
+        FixedFilm part;  // the splat's layers only
+        part.width = c_.width, part.height = c_.height;
+        for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
         covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
                                  splat_, part, &totals_.splat, &totals_.coverage, timeUp);
         sum.add(part);
@@ -189,16 +201,18 @@ public:
 private:
     static constexpr int kProbeLayers = kCaustic + 1;  // the layers a splat writes: direct, indirect, caustic
 
-    // At rank 0: the scale m of least expected error, from the four halves.
-    double choose(const std::vector<int64_t>& halves, const double seconds[2], const Timer& whole, double other) {
+    // At rank 0: the scale m of least expected error, from the four halves' indirect light.
+    double choose(const FixedFilm halves[4], const double seconds[2], double gather, const Timer& whole, double other) {
+        const int64_t *A = halves[0].buffers[kIndirect].data(), *B = halves[1].buffers[kIndirect].data(),
+                      *C = halves[2].buffers[kIndirect].data(), *D = halves[3].buffers[kIndirect].data();
         std::vector<float> light(values_);
         for (size_t i = 0; i < values_; ++i) {
             const int ch = int(i % 3);
             light[i] = eye_.film.layers[kEmission][i / 3][ch] + eye_.film.layers[kDirect][i / 3][ch] +
-                       float(double(halves[i] + halves[values_ + i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
+                       float(double(A[i] + B[i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
         }
         const KernelScaleProbe probe =
-            probeKernelScale(&halves[0], &halves[values_], &halves[2 * values_], &halves[3 * values_], light, FixedFilm::kScale);
+            probeKernelScale(A, B, C, D, light, FixedFilm::kScale);
         KernelScalePlan plan;
         plan.passes = c_.cfg.renderPassCount();
         plan.alpha = c_.cfg.alpha;
@@ -207,9 +221,9 @@ private:
             plan.secondsLeft = c_.cfg.timeLimit - whole.seconds();
             plan.passOther = other;
             // a + b·h² for the quarter, from its two splats (b: the part that grows with the
-            // kernel's area), then for all the indirect photons.
+            // kernel's area), then for all the indirect photons, and a pass's one gather.
             const double b = std::max(0.0, seconds[0] - seconds[1]) * 4.0 / 3.0, a = std::max(0.0, seconds[0] - b);
-            plan.splatFixed = a * KernelScaleProbe::kShare;
+            plan.splatFixed = a * KernelScaleProbe::kShare + gather;
             plan.splatScaled = b * KernelScaleProbe::kShare;
             plan.passesPerRound = c_.ranks.size();
         }
@@ -221,10 +235,6 @@ private:
         c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
         c_.stats.setCount("kernel_probe_bias", probe.bias());
         return scale;
-    }
-    void splatInto(const PhotonMap& photons, FixedFilm& part, bool counted) const {
-        for (std::vector<int64_t>& b : part.buffers) std::fill(b.begin(), b.end(), 0);
-        targets_.splat(photons, splat_, part, counted ? &totals_.splat : nullptr, counted ? &totals_.coverage : nullptr);
     }
 
     const RenderContext& c_;

@@ -82,6 +82,33 @@ TEST(SparseReceivers, GatherGivesAConstantIrradianceBack) {
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(double(pixels[size_t(x) * 3 + c]) / scale, perPixel * 0.25 * e, 1e-6);
 }
 
+// Several sums of slots gathered in one search give each the pixels of its own gather, to the
+// bit (the first pass's kernel-scale probe gathers its four halves so).
+TEST(SparseReceivers, OneSearchForSeveralSumsGivesEachItsOwnGather) {
+    ThreadPool pool(2);
+    const int width = 300;
+    const EyeSamples samples = stripSamples(width, 4, 0.25f);
+    const IrradianceReceivers r = chooseReceivers(samples, width, 1, 0.04f, pool);
+    std::mt19937_64 rng(3);
+    std::vector<int64_t> slots[3];
+    for (std::vector<int64_t>& s : slots) {
+        s.resize(r.slots() * 3);
+        for (int64_t& v : s) v = int64_t(rng() % (uint64_t(1) << 36));
+    }
+    std::vector<int64_t> together[3], alone[3];
+    for (int k = 0; k < 3; ++k) {
+        together[k].assign(size_t(width) * 3, 0);
+        alone[k].assign(size_t(width) * 3, 0);
+        gatherIrradiance(r, samples, slots[k], FixedFilm::kScale, alone[k], pool);
+    }
+    gatherIrradiance(r, samples, {&slots[0], &slots[1], &slots[2]}, FixedFilm::kScale,
+                     {&together[0], &together[1], &together[2]}, pool);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(together[k], alone[k]) << "sum " << k;
+        EXPECT_NE(alone[k], std::vector<int64_t>(size_t(width) * 3, 0));
+    }
+}
+
 namespace {
 
 // A render at `spacing` (0: every eye sample receives), 2 passes.

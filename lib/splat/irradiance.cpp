@@ -216,11 +216,14 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
     return out;
 }
 
-void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples, const std::vector<int64_t>& slots,
-                      double fixedScale, std::vector<int64_t>& pixels, ThreadPool& pool) {
+void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples,
+                      const std::vector<const std::vector<int64_t>*>& slots, double fixedScale,
+                      const std::vector<std::vector<int64_t>*>& pixels, ThreadPool& pool) {
+    const size_t sums = slots.size();
     const float invCell = 0.5f / r.spacing;
     const double toLight = 1.0 / fixedScale;
     pool.parallelFor(int64_t(samples.size()), 4096, [&](int64_t b, int64_t e, int) {
+        std::vector<double> sum(sums * 3);  // per sum of slots: its RGB
         for (int64_t i = b; i < e; ++i) {
             const uint32_t bsdf = samples.bsdf[size_t(i)];
             if (EyeSamples::isGlossy(bsdf)) continue;
@@ -231,7 +234,8 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples, c
             // The 2×2×2 cells around p hold every point within the spacing (half a cell).
             const int cx = cellCoordinate(p.x * invCell - 0.5f), cy = cellCoordinate(p.y * invCell - 0.5f),
                       cz = cellCoordinate(p.z * invCell - 0.5f);
-            double sum[3] = {0.0, 0.0, 0.0}, weights = 0.0;
+            std::fill(sum.begin(), sum.end(), 0.0);
+            double weights = 0.0;
             for (int k = 0; k < 8; ++k) {
                 uint32_t begin, end;
                 cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
@@ -239,19 +243,23 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples, c
                     const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
                     if (w <= 0.f) continue;
                     weights += w;
-                    for (int c = 0; c < 3; ++c) sum[c] += double(w) * double(slots[size_t(s) * 3 + c]);
+                    for (size_t j = 0; j < sums; ++j)
+                        for (int c = 0; c < 3; ++c) sum[j * 3 + c] += double(w) * double((*slots[j])[size_t(s) * 3 + c]);
                 }
             }
             if (!(weights > 0.0)) continue;
-            int64_t* px = &pixels[size_t(samples.pixel[size_t(i)]) * 3];
-            for (int c = 0; c < 3; ++c) {
-                const int64_t v = fixedOf(double(f[c]) * sum[c] * toLight / weights, fixedScale);
-                if (v) __atomic_fetch_add(&px[c], v, __ATOMIC_RELAXED);  // integers: any order, the same sum
-            }
+            const size_t at = size_t(samples.pixel[size_t(i)]) * 3;
+            for (size_t j = 0; j < sums; ++j)
+                for (int c = 0; c < 3; ++c) {
+                    const int64_t v = fixedOf(double(f[c]) * sum[j * 3 + c] * toLight / weights, fixedScale);
+                    if (v) __atomic_fetch_add(&(*pixels[j])[at + c], v, __ATOMIC_RELAXED);  // integers: any order, the same sum
+                }
         }
     });
-    for (size_t k = 0; k < r.glossyPixel.size(); ++k)
-        for (int c = 0; c < 3; ++c) pixels[size_t(r.glossyPixel[k]) * 3 + c] += slots[(r.irradianceSlots + k) * 3 + c];
+    for (size_t j = 0; j < sums; ++j)
+        for (size_t k = 0; k < r.glossyPixel.size(); ++k)
+            for (int c = 0; c < 3; ++c)
+                (*pixels[j])[size_t(r.glossyPixel[k]) * 3 + c] += (*slots[j])[(r.irradianceSlots + k) * 3 + c];
 }
 
 }  // namespace rs

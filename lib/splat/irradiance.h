@@ -71,8 +71,15 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
 // a glossy sample's slot as it received it, a Lambert sample's w·f_r times the weighted mean
 // of its receivers' irradiance, from `slots` (slot × RGB, fixed point). `samples` may be in any
 // order (the tree's): each sample's light is rounded on its own and added as an integer.
-void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& samples, const std::vector<int64_t>& slots,
-                      double fixedScale, std::vector<int64_t>& pixels, ThreadPool& pool);
+// Several sums of slots at once (one search for their receivers), each into its own pixels:
+// pixels[k] gets what a gather of slots[k] alone gives it, to the bit.
+void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& samples,
+                      const std::vector<const std::vector<int64_t>*>& slots, double fixedScale,
+                      const std::vector<std::vector<int64_t>*>& pixels, ThreadPool& pool);
+inline void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& samples, const std::vector<int64_t>& slots,
+                             double fixedScale, std::vector<int64_t>& pixels, ThreadPool& pool) {
+    gatherIrradiance(receivers, samples, {&slots}, fixedScale, {&pixels}, pool);
+}
 
 // A receiver's weight for an eye sample (0: it does not stand for it): (1 − d²/s²)² within the
 // spacing s on the same surface (IrradianceSettings). The choice and the gather ask the same.

@@ -20,11 +20,7 @@ PassTargets::PassTargets(const RayAccel& accel, const OcclusionGrid& grid, EyeSa
 
 uint64_t PassTargets::splat(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, SplatStats* stats,
                             CoverageStats* coverage, const std::function<bool()>& timeUp) const {
-    FixedFilm slots;  // the receivers' irradiance, slot × RGB
-    if (sparse_) {
-        slots.width = int(receivers_.slots()), slots.height = 1;
-        slots.buffers[kIndirect].assign(receivers_.slots() * 3, 0);
-    }
+    std::vector<int64_t> slots(sparse_ ? receivers_.slots() * 3 : 0);  // the receivers' irradiance, slot × RGB
     const size_t n = photons.rays.size();
     uint64_t covered = UINT64_MAX;
     for (size_t begin = 0; begin < n;) {
@@ -37,16 +33,31 @@ uint64_t PassTargets::splat(const PhotonMap& photons, const SplatSettings& setti
             break;
         }
     }
-    if (!sparse_) return covered;
-    if (settings.shares > 1) ranks_.sumAtRoot(slots.buffers[kIndirect]);
-    if (settings.share == 0)
-        gatherIrradiance(receivers_, samples_, slots.buffers[kIndirect], FixedFilm::kScale, part.buffers[kIndirect], pool_);
+    gather({&slots}, {&part}, settings);
     return covered;
+}
+
+void PassTargets::land(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, std::vector<int64_t>& slots,
+                       SplatStats* stats, CoverageStats* coverage) const {
+    slots.assign(sparse_ ? receivers_.slots() * 3 : 0, 0);
+    splatPortion(photons, 0, photons.rays.size(), settings, part, slots, stats, coverage);
+}
+
+void PassTargets::gather(const std::vector<std::vector<int64_t>*>& slots, const std::vector<FixedFilm*>& parts,
+                         const SplatSettings& settings) const {
+    if (!sparse_) return;
+    if (settings.shares > 1)
+        for (std::vector<int64_t>* s : slots) ranks_.sumAtRoot(*s);
+    if (settings.share != 0) return;
+    std::vector<const std::vector<int64_t>*> sums(slots.begin(), slots.end());
+    std::vector<std::vector<int64_t>*> pixels;
+    for (FixedFilm* p : parts) pixels.push_back(&p->buffers[kIndirect]);
+    gatherIrradiance(receivers_, samples_, sums, FixedFilm::kScale, pixels, pool_);
 }
 
 // Photons [begin, end): the indirect ones onto the receivers' `slots`, the others onto `part`.
 void PassTargets::splatPortion(const PhotonMap& photons, size_t begin, size_t end, const SplatSettings& settings,
-                               FixedFilm& part, FixedFilm& slots, SplatStats* stats, CoverageStats* coverage) const {
+                               FixedFilm& part, std::vector<int64_t>& slots, SplatStats* stats, CoverageStats* coverage) const {
     PhotonMap indirect, others;
     for (size_t i = begin; i < end; ++i)
         (sparse_ && photons.rays[i].cls == kPhotonIndirect ? indirect : others).rays.push_back(photons.rays[i]);
@@ -56,7 +67,11 @@ void PassTargets::splatPortion(const PhotonMap& photons, size_t begin, size_t en
     // A few rays a photon: finding the triangles near its cylinder cost more than the rays they
     // spared (the staircase interior's splat 1.5 → 1.05 s without them).
     sparse.visibilityPlanes = false;
-    splatPhotons(accel_, receiverTree_, receivers_.samples, indirect, sparse, slots, pool_, reporter_, stats, coverage);
+    FixedFilm receivers;  // the slots as a film of one row, as splatPhotons writes
+    receivers.width = int(receivers_.slots()), receivers.height = 1;
+    receivers.buffers[kIndirect].swap(slots);
+    splatPhotons(accel_, receiverTree_, receivers_.samples, indirect, sparse, receivers, pool_, reporter_, stats, coverage);
+    receivers.buffers[kIndirect].swap(slots);
 }
 
 }  // namespace rs

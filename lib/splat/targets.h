@@ -38,9 +38,18 @@ public:
 
     static constexpr size_t kPortions = 16, kPortion = 4096;
 
+    // splat() in two steps, for several photon maps whose receivers are searched once: land()
+    // adds `photons`' light to `part`'s photon layers, the indirect photons' on sparse receivers
+    // to `slots` (the receivers' sums, sized here); gather() sums each `slots` at rank 0 in a
+    // shared pass and adds it to its `parts` as splat() would have.
+    void land(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, std::vector<int64_t>& slots,
+              SplatStats* stats, CoverageStats* coverage) const;
+    void gather(const std::vector<std::vector<int64_t>*>& slots, const std::vector<FixedFilm*>& parts,
+                const SplatSettings& settings) const;
+
 private:
     void splatPortion(const PhotonMap& photons, size_t begin, size_t end, const SplatSettings& settings, FixedFilm& part,
-                      FixedFilm& slots, SplatStats* stats, CoverageStats* coverage) const;
+                      std::vector<int64_t>& slots, SplatStats* stats, CoverageStats* coverage) const;
 
     const RayAccel& accel_;
     EyeSamples& samples_;
