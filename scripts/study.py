@@ -500,7 +500,10 @@ def results_markdown(results, machine, args, plot_png, pictures):
            "up to 3× too dark). It is fixed, and `tests/path_test.cpp` now checks Lambert's polygon formula "
            "there. Material models: the gold icosahedron is Mitsuba's `principled` (metallic 1), whose masking "
            "term is the separable Smith one where raysplat uses the height-correlated one; at roughness 0.3 "
-           "the difference stays inside the noise.",
+           "the difference stays inside the noise. A scene whose materials the converter cannot carry over "
+           "differs by design: textured_room's normal, metallic-roughness and emissive textures and its vertex "
+           "colours are left out of its Mitsuba scene (the converter warns of each); Blender's Cycles checks "
+           "that scene instead (`scripts/blender_cycles_check.py`, in the `blender` test suite).",
            ""]
     for res in results:
         v = res["validation"]
