@@ -158,7 +158,10 @@ public:
         double scale = c_.ranks.rank() == 0 ? choose(parts, seconds, gather, whole, other) : 1.0;
         c_.ranks.broadcast(&scale, 1);
         const float m = float(scale);
-        for (int j = 0; j < 4; ++j) std::vector<int64_t>().swap(parts[j].buffers[kIndirect]), std::vector<int64_t>().swap(slots[j]);
+        for (int j = 0; j < 4; ++j) {  // the halves are done with: freed before the rest is splatted
+            parts[j] = FixedFilm();
+            slots[j] = std::vector<int64_t>();
+        }
         std::vector<int64_t>& light = sum.buffers[kIndirect];
         const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
         for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
