@@ -11,12 +11,13 @@ noise. The checks: the image mean of raysplat is within 3 % of Cycles' (every ch
 together), and the 8×8-pixel block means differ by no more than their noise and a stated bias:
 relative MSE of the blocks ≤ AGREE_RATIO (validate_mitsuba.py) × the two renderers' noise +
 BLOCK_BIAS². The bias is what the two readings of the normal maps differ by. Measured at 128×96,
-64 samples a half: textured_room's means 1.3 % apart (raysplat brighter), its blocks 2.9 % RMS
-apart against 1.6 % noise (ratio 3.4; raysplat's path tracer as far, ratio 10 against its lower
-noise); the same room without its normal maps 0.4 % apart, blocks at 1.7 × noise; all-Lambert
-(no normal or metallic-roughness maps) 0.1 % and 1.3 × noise, and lit by the textured screen
-alone 0.0 % and 1.1 × noise: within noise, the path tracer's too. So the block check bounds the
-difference the normal maps make (and the glossy layers' small one), BLOCK_BIAS.
+64 samples a half: textured_room's means 0.15 % apart, its blocks 2.7 % RMS apart against 1.5 %
+noise (ratio 3.2), the floor near the camera 8–13 % darker in raysplat where its normal map
+turns the planks' normals; the same room without its normal maps 0.6 % apart, blocks at 2.0 ×
+noise; with its floor a plain dielectric of roughness 0.3 (no maps) 0.8 % and 1.9 × noise
+(glTF's fresnel_mix in raysplat's place of Cycles' albedo scaling would make that floor 5–12 %
+brighter, 4.1 × noise). So the block check bounds the difference the normal maps make,
+BLOCK_BIAS.
 
 Cycles is set up as raysplat renders: the glTF camera at the image size, a box pixel filter of
 one pixel, every bounce up to raysplat's 32 path vertices, no clamping, no glossy filter, no
@@ -36,7 +37,7 @@ raysplat does (docs/usage.md's feature table):
   2.4 % of their light, and the room 2.4 % with them); it is replaced by a float image of its
   linear values.
 Everything else is the importer's Principled BSDF as it makes it: the dielectric specular of
-F0 = 0.04 under the diffuse, metals, normal maps (tangents by MikkTSpace, green up; Cycles
+F0 = 0.04 over the diffuse (raysplat layers them as Cycles does, docs/design.md §3), metals, normal maps (tangents by MikkTSpace, green up; Cycles
 4.2 shades a bump-mapped diffuse closure with Chiang et al.'s 2019 bump shadowing, as raysplat
 does: a Lambert plane under a sun, its normal map tilted 30° towards it, renders at 0.4380,
 0.9194 and 0.7648 of plain n·l at three sun elevations, the term's values to 4 digits; where

@@ -2,7 +2,7 @@
 // the analytic radiance of normal-mapped patches under a directional light (with given and
 // with computed tangents, and shadowed at a grazing light as Chiang et al. 2019), photons'
 // adjoint bounce under a shading normal, the dielectric
-// mix against glTF's fresnel_mix, and equivalences: COLOR_0 × white against the same colour as a
+// mix against its definition and the white furnace, and equivalences: COLOR_0 × white against the same colour as a
 // factor, a metallic factor of 1 × a texture saying metal 0 against metal 0, a texture
 // transform of scale 2 against doubled uvs (and TEXCOORD_1 against TEXCOORD_0), a checker
 // emissive texture against the untextured emitter of half its strength.
@@ -214,11 +214,12 @@ TEST(NormalMap, PhotonsBounceWithTheAdjointBsdf) {
     }
 }
 
-// The Lambert + GGX mix of a dielectric is glTF 2.0's (Appendix B): fresnel_mix(f0 0.04,
-// diffuse, specular) = (1 − F)·ρ/π + F·D·V with F = f0 + (1 − f0)(1 − |v·h|)^5, written out
-// here from the specification with GGX's D and Smith's height-uncorrelated G (design.md §3);
-// ρ/π + F·D·V, the diffuse not weighed by 1 − F, is F·ρ/π above it.
-TEST(MetallicRoughness, DielectricMixIsGltfFresnelMix) {
+// The Lambert + GGX mix of a dielectric layers its diffuse under the specular by albedo scaling,
+// as Blender's Principled BSDF does: f = (1 − E(wo))·ρ/π + F·D·V, F = f0 + (1 − f0)(1 − v·h)^5
+// of f0 0.04, GGX's D and Smith's height-uncorrelated G (design.md §3) written out here, and E the
+// specular part's directional albedo, integrated here by brute force over a 2048² grid of wi.
+// glTF's fresnel_mix, (1 − F)·ρ/π + F·D·V, differs: 1 − F averages above 1 − E at grazing angles.
+TEST(MetallicRoughness, DielectricMixLayersTheDiffuseByTheSpecularAlbedo) {
     Scene s;
     const Vec3 rho(0.8f, 0.5f, 0.3f);
     const uint32_t m = addMaterial(s, MaterialKind::Mix, rho);
@@ -227,25 +228,64 @@ TEST(MetallicRoughness, DielectricMixIsGltfFresnelMix) {
         s.materials[m].roughness = roughness;
         const float a2 = roughness * roughness * roughness * roughness;
         const auto lambda = [&](float c) { return 0.5f * (std::sqrt(1.f + a2 * (1.f - c * c) / (c * c)) - 1.f); };
+        const auto specular = [&](const Vec3& wo, const Vec3& wi) {
+            const Vec3 h = glm::normalize(wo + wi);
+            const float vh = glm::dot(wo, h), F = 0.04f + 0.96f * std::pow(1.f - vh, 5.f);
+            const float d = h.z * h.z * (a2 - 1.f) + 1.f, D = a2 / (kPi * d * d);
+            return F * D / (1.f + lambda(wo.z) + lambda(wi.z)) / (4.f * wo.z * wi.z);
+        };
         for (float cosO : {1.f, 0.5f, 0.15f}) {
+            const Vec3 wo(std::sqrt(1.f - cosO * cosO), 0.f, cosO);
+            double E = 0.0;  // ∫ specular · cos θi dωi, midpoints in (cos² θi, φ): dωi cos θi = d(cos²)/2 dφ
+            const int n = 2048;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    const float c = std::sqrt((i + 0.5f) / n), phi = 2.f * kPi * (j + 0.5f) / n, r = std::sqrt(1.f - c * c);
+                    E += specular(wo, Vec3(r * std::cos(phi), r * std::sin(phi), c));
+                }
+            E *= kPi / (double(n) * n);
+            SurfacePoint sp;
+            sp.ng = sp.ns = Vec3(0, 0, 1);
+            sp.material = m;
+            Bsdf bsdf(s, sp, wo);
+            for (Vec3 wi : {Vec3(-0.6f, 0.2f, 0.77f), Vec3(0.1f, -0.9f, 0.42f), Vec3(-0.95f, 0.f, 0.3f)}) {
+                wi = glm::normalize(wi);
+                const Vec3 want = float(1.0 - E) * rho / kPi + Vec3(specular(wo, wi));
+                const Vec3 got = bsdf.eval(wo, wi);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(got[c], want[c], 5e-3f * want[c]) << "roughness " << roughness << ", cos θo " << cosO;
+            }
+        }
+    }
+}
+
+// A white dielectric mix reflects all it receives from any direction (the furnace: its albedo,
+// by sampling the BSDF, is 1), at every roughness and angle: nothing is lost between the layers
+// or counted twice. glTF's fresnel_mix reflects 1.15 of it at roughness 0.15 and cos θo 0.3, 1.5
+// at cos θo 0.1, and 0.97 at roughness 1.
+TEST(MetallicRoughness, WhiteDielectricMixReflectsAllItReceives) {
+    Scene s;
+    const uint32_t m = addMaterial(s, MaterialKind::Mix, Vec3(1.f));
+    s.materials[m].metallic = 0.f;
+    for (float roughness : {0.15f, 0.3f, 0.6f, 1.f})
+        for (float cosO : {1.f, 0.6f, 0.3f, 0.1f}) {
+            s.materials[m].roughness = roughness;
             SurfacePoint sp;
             sp.ng = sp.ns = Vec3(0, 0, 1);
             sp.material = m;
             const Vec3 wo(std::sqrt(1.f - cosO * cosO), 0.f, cosO);
             Bsdf bsdf(s, sp, wo);
-            for (Vec3 wi : {Vec3(-0.6f, 0.2f, 0.77f), Vec3(0.1f, -0.9f, 0.42f), Vec3(-0.95f, 0.f, 0.3f)}) {
-                wi = glm::normalize(wi);
-                const Vec3 h = glm::normalize(wo + wi);
-                const float vh = glm::dot(wo, h), F = 0.04f + 0.96f * std::pow(1.f - vh, 5.f);
-                const float d = h.z * h.z * (a2 - 1.f) + 1.f, D = a2 / (kPi * d * d);
-                const float V = 1.f / (1.f + lambda(wo.z) + lambda(wi.z)) / (4.f * wo.z * wi.z);
-                const Vec3 want = (1.f - F) * rho / kPi + Vec3(F * D * V);
-                const Vec3 got = bsdf.eval(wo, wi);
-                for (int c = 0; c < 3; ++c)
-                    EXPECT_NEAR(got[c], want[c], 1e-3f * want[c]) << "roughness " << roughness << ", cos θo " << cosO;
-            }
+            double albedo = 0.0;
+            const int n = 256;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    const BsdfSample b = bsdf.sample(wo, toUnitFloat(reverseBits(uint32_t(i * n + j))), Vec2((i + 0.5f) / n, (j + 0.5f) / n),
+                                                     Transport::Radiance);
+                    if (b.pdf > 0.f) albedo += b.weight.x;
+                }
+            albedo /= double(n) * n;
+            EXPECT_NEAR(albedo, 1.0, 0.01) << "roughness " << roughness << ", cos θo " << cosO;
         }
-    }
 }
 
 // -- Vertex colours, metallic-roughness, texture transforms --------------------------------

@@ -72,7 +72,7 @@ Vec3 EyeSamples::glossyF(uint32_t r, const Vec3& n, const Vec3& wi, float cosI, 
     const Vec3 h = glm::normalize(wo + wi);
     const GgxReflection g = ggxReflection(cosO, cosI, glm::dot(n, h), glm::dot(wo, h), lobe.alpha);
     const Vec3 specular = decodeRgb9e5(lobe.specular), weight = decodeRgb9e5(lobe.weight);
-    return f * diffuseTransmittance(g.m5) + (specular + (weight - specular) * g.m5) * g.dg;
+    return f + (specular + (weight - specular) * g.m5) * g.dg;
 }
 
 void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, bool bent, uint32_t px, const Vec3& diffuse,

@@ -50,7 +50,45 @@ Vec3 sampleGgxVisibleNormal(const Vec3& wo, float alpha, Vec2 u) {
 
 Vec3 reflect(const Vec3& w, const Vec3& n) { return 2.f * glm::dot(w, n) * n - w; }
 
+// The directional albedo of the mix's dielectric GGX layer (f0 = kDielectricF0), tabulated over
+// cos θo and roughness = √α by integrating F·G2/G1 over visible normals on a fixed 32×32 grid:
+// deterministic, computed once, on first use.
+struct DielectricAlbedoTable {
+    static constexpr int kCos = 64, kRough = 32, kGrid = 32;
+    float e[kRough][kCos];
+    DielectricAlbedoTable() {
+        for (int r = 0; r < kRough; ++r) {
+            const float alpha = std::max(sqr(float(r) / (kRough - 1)), 1e-4f);
+            for (int c = 0; c < kCos; ++c) {
+                const float cosO = std::max(float(c) / (kCos - 1), 1e-3f);
+                const Vec3 wo(std::sqrt(1.f - cosO * cosO), 0.f, cosO);
+                const float lambdaO = ggxLambda(wo, alpha);
+                double sum = 0.0;
+                for (int i = 0; i < kGrid; ++i)
+                    for (int j = 0; j < kGrid; ++j) {
+                        const Vec3 h = sampleGgxVisibleNormal(wo, alpha, Vec2((i + 0.5f) / kGrid, (j + 0.5f) / kGrid));
+                        const Vec3 wi = reflect(wo, h);
+                        if (wi.z <= 0.f) continue;
+                        const float f = kDielectricF0 + (1.f - kDielectricF0) * schlickWeight(glm::dot(wo, h));
+                        sum += f * (1.f + lambdaO) / (1.f + lambdaO + ggxLambda(wi, alpha));
+                    }
+                e[r][c] = float(sum / (kGrid * kGrid));
+            }
+        }
+    }
+};
+
 }  // namespace
+
+float dielectricLayerAlbedo(float cosO, float alpha) {
+    static const DielectricAlbedoTable table;
+    using T = DielectricAlbedoTable;
+    const float x = std::clamp(cosO, 0.f, 1.f) * (T::kCos - 1), y = std::clamp(std::sqrt(alpha), 0.f, 1.f) * (T::kRough - 1);
+    const int c = std::min(int(x), T::kCos - 2), r = std::min(int(y), T::kRough - 2);
+    const float fx = x - c, fy = y - r;
+    const float lo = glm::mix(table.e[r][c], table.e[r][c + 1], fx), hi = glm::mix(table.e[r + 1][c], table.e[r + 1][c + 1], fx);
+    return glm::mix(lo, hi, fy);
+}
 
 GgxReflection ggxReflection(float cosO, float cosI, float cosH, float cosOH, float alpha) {
     float g = 1.f / (1.f + ggxLambda(cosO, alpha) + ggxLambda(cosI, alpha));
@@ -67,7 +105,9 @@ float fresnelDielectric(float cosThetaI, float eta) {
 }
 
 Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
-    : material_(&scene.materials[sp.material]), albedo_(scene.albedo(sp.material, sp.attr, sp.footprint, sp.tri)) {
+    : material_(&scene.materials[sp.material]),
+      albedo_(scene.albedo(sp.material, sp.attr, sp.footprint, sp.tri)),
+      wo_(wo) {
     const Material& m = *material_;
     bool outside = glm::dot(wo, sp.ng) >= 0.f;
     ng_ = outside ? sp.ng : -sp.ng;
@@ -87,11 +127,16 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
         case MaterialKind::Mix:
             hasGgx_ = true;
             diffuseWeight_ = 1.f - mr.x;
+            layered_ = true;
             f0_ = glm::mix(Vec3(kDielectricF0), albedo_, mr.x);
             break;
         case MaterialKind::Mirror: f0_ = albedo_; break;
         case MaterialKind::Glass: break;
     }
+}
+
+float Bsdf::diffuseScale(float cosO) const {
+    return layered_ ? diffuseWeight_ * (1.f - dielectricLayerAlbedo(cosO, alpha_)) : diffuseWeight_;
 }
 
 float Bsdf::specularProbability(const Vec3& woLocal) const {
@@ -107,11 +152,11 @@ Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
     if (glm::dot(wiW, ng_) <= 0.f) return Vec3(0.f);  // opaque: no light from behind
     Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
     if (wo.z <= 0.f || wi.z <= 0.f) return Vec3(0.f);
-    Vec3 f = diffuseWeight_ * albedo_ * kInvPi * (bumped_ ? bumpShadowing(ng_, frame_.n, wiW) : 1.f);
+    Vec3 f = diffuseScale(wo.z) * albedo_ * kInvPi * (bumped_ ? bumpShadowing(ng_, frame_.n, wiW) : 1.f);
     if (hasGgx_) {
         Vec3 h = glm::normalize(wo + wi);
         GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);
-        f = f * diffuseTransmittance(r.m5) + (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
+        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
     }
     return f;
 }

@@ -32,7 +32,8 @@ public:
     BsdfSample sample(const Vec3& wo, float uLobe, Vec2 u, Transport mode) const;
     Vec3 albedo() const { return albedo_; }
     // The parts eval() is made of, for eye samples that store them (eye.h's GlossyLobe).
-    Vec3 diffuseReflectance() const { return diffuseWeight_ * albedo_ * kInvPi; }  // the diffuse lobe's f
+    // The diffuse lobe's f towards the wo of the constructor (the viewer, for eye samples).
+    Vec3 diffuseReflectance() const { return diffuseScale(frame_.toLocal(wo_).z) * albedo_ * kInvPi; }
     bool hasGlossyLobe() const { return hasGgx_; }
     Vec3 fresnelAtNormal() const { return f0_; }
     float ggxAlpha() const { return alpha_; }
@@ -43,14 +44,19 @@ public:
 
 private:
     float specularProbability(const Vec3& woLocal) const;
+    // The diffuse lobe's weight seen from a direction of cosine cosO to the shading normal:
+    // (1 − metallic), under the mix's dielectric layer times 1 − that layer's albedo.
+    float diffuseScale(float cosO) const;
 
     const Material* material_;
     Frame frame_;      // around the shading normal, flipped to wo's side for opaque materials
     Vec3 ng_;          // geometric normal, same side as frame_.n for opaque materials
     Vec3 albedo_;      // base colour at the point
     Vec3 f0_;          // Fresnel at normal incidence of the GGX / mirror lobe
+    Vec3 wo_;          // the constructor's wo
     float diffuseWeight_ = 0.f;  // (1 − metallic) for Lambert and mix
     bool hasGgx_ = false;
+    bool layered_ = false;  // the mix: a diffuse lobe under a dielectric GGX layer
     bool bumped_ = false;
     float alpha_ = 1.f;
     float eta_ = 1.f;  // glass: ηt/ηi for light leaving towards the side opposite wo
@@ -65,9 +71,11 @@ struct GgxReflection {
 
 // Fresnel at normal incidence of the mix's dielectric layer (glTF's IOR 1.5).
 constexpr float kDielectricF0 = 0.04f;
-// What the dielectric layer lets through to the diffuse lobe: glTF 2.0's fresnel_mix (Appendix
-// B) weighs the diffuse by 1 − F(wo·h), F Schlick's of f0 = 0.04; m5 as in GgxReflection.
-inline float diffuseTransmittance(float m5) { return 1.f - (kDielectricF0 + (1.f - kDielectricF0) * m5); }
+// The directional albedo E(cos θo) of that layer, a GGX lobe of roughness² = alpha with Schlick's
+// Fresnel of f0 = kDielectricF0: what it reflects of light arriving from all of the hemisphere.
+// The diffuse lobe under it is weighed by 1 − E(cos θo) (albedo scaling, as Blender's Principled
+// BSDF layers it): a white mix reflects all it receives, at every angle.
+float dielectricLayerAlbedo(float cosO, float alpha);
 
 // The diffuse lobe's share of light from wi on a surface whose shading normal ns leans from its
 // geometric normal ng (normal maps): the shadowing of Chiang, Li & Burley 2019, "Taming the
