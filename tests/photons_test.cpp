@@ -180,7 +180,7 @@ TEST(KernelScale, ScaledKernelsAreTheTracersAtThatScale) {
 }
 
 // Four halves made from a known bias and noise: the probe finds them. Pixel i has light T,
-// whose kernels at scale 1 add a bias b = 0.2·T (¼ of it at ½), and each half (an estimate
+// whose kernels at scale 1 add a bias b = 0.2·T (½ of it at ½: kBiasOrder 1), and each half (an estimate
 // of the pass from one eighth of its photons) noise of standard deviation σ at scale 1, 2σ at ½.
 TEST(KernelScale, ProbeMeasuresBiasAndNoise) {
     const int n = 200000;
@@ -197,7 +197,7 @@ TEST(KernelScale, ProbeMeasuresBiasAndNoise) {
         // Each half is a quarter's half as splatted: its estimate of the pass over kShare, halved.
         auto half = [&](double bias, double sd) { return int64_t(std::llround((t + bias + sd * g(rng)) / 2 / k * fixed)); };
         a[i] = half(b1, sigma), b[i] = half(b1, sigma);
-        c[i] = half(b1 / 4, 2 * sigma), d[i] = half(b1 / 4, 2 * sigma);
+        c[i] = half(b1 / 2, 2 * sigma), d[i] = half(b1 / 2, 2 * sigma);
         bias += w * b1 * b1;
         noise += w * 2 * (sigma / 2) * (sigma / 2) / k;  // (A + B)'s variance, for the whole pass's photons
     }
@@ -207,18 +207,19 @@ TEST(KernelScale, ProbeMeasuresBiasAndNoise) {
     EXPECT_NEAR(p.finerNoise / (4 * noise), 1.0, 0.02);
 }
 
-// The choice against the analytic optimum: one pass, E(m) = β m⁴ + V m⁻², least at
-// m = (V / 2β)^(1/6).
+// The choice against the analytic optimum: one pass, E(m) = β m² + V m⁻² (bias ∝ h, noise ∝
+// h⁻²), least at m = (V / β)^(1/4).
 TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
     KernelScalePlan one;
     one.passes = 1;
     KernelScaleProbe p;
-    p.biasChange = 9.0 / 16.0;  // β = 1
-    p.noise = 2.0 * std::pow(0.5, 6.0);
+    static_assert(kBiasOrder == 1.0);
+    p.biasChange = 0.25;  // β = 1: b₁ − b_½ = b₁ / 2
+    p.noise = std::pow(0.5, 4.0);
     p.finerNoise = 4.0 * p.noise;  // q = 2
     EXPECT_NEAR(chooseKernelScale(p, one), 0.5f, 0.5f * 0.036f);
-    EXPECT_NEAR(expectedKernelError(p, one, 0.5f), 1.0 / 16 + 0.125, 1e-9);
-    p.noise = 2.0 * std::pow(0.7, 6.0);  // optimum 0.7: E(1)/E(0.7) = 1.7
+    EXPECT_NEAR(expectedKernelError(p, one, 0.5f), 0.25 + 0.25, 1e-9);
+    p.noise = std::pow(0.7, 4.0);  // optimum 0.7: E(1)/E(0.7) = 1.27
     p.finerNoise = 4.0 * p.noise;
     EXPECT_NEAR(chooseKernelScale(p, one), 0.7f, 0.7f * 0.036f);
     // More passes average the noise away and leave the bias: smaller kernels.

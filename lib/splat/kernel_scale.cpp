@@ -5,6 +5,11 @@
 
 namespace rs {
 
+double KernelScaleProbe::bias() const {
+    const double f = 1.0 - std::pow(0.5, kBiasOrder);  // b₁ − b_½ = f·b₁
+    return std::max(0.0, biasChange) / (f * f);
+}
+
 float passRadiusScale(int p, float alpha) {
     double r2 = 1.0;
     for (int n = 1; n <= p; ++n) r2 *= (n + double(alpha)) / (n + 1.0);
@@ -51,15 +56,16 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
     passes = std::clamp(passes, 1.0, 1e6);
     const int whole = std::max(1, int(std::lround(passes)));
     const double q = noiseExponent(probe), relative = double(m);
-    double r2 = 0.0, noise = 0.0, pass2 = 1.0;  // pass p's r², as passRadiusScale makes it
+    const double e = kBiasOrder;
+    double re = 0.0, noise = 0.0, pass2 = 1.0;  // pass p's r², as passRadiusScale makes it; re: mean r^e
     for (int p = 0; p < whole; ++p) {
         if (p > 0) pass2 *= (p + double(plan.alpha)) / (p + 1.0);
-        r2 += pass2;
+        re += std::pow(pass2, e / 2.0);
         noise += std::pow(pass2 * relative * relative, -q / 2.0);
     }
-    r2 /= whole;
+    re /= whole;
     noise /= whole;
-    return probe.bias() * std::pow(relative, 4.0) * r2 * r2 + probe.noise * noise / passes;
+    return probe.bias() * std::pow(relative, 2.0 * e) * re * re + probe.noise * noise / passes;
 }
 
 float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
