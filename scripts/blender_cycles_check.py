@@ -10,14 +10,13 @@ seeds (raysplat its default method, photon ray splatting): the two halves give e
 noise. The checks: the image mean of raysplat is within 3 % of Cycles' (every channel and all
 together), and the 8×8-pixel block means differ by no more than their noise and a stated bias:
 relative MSE of the blocks ≤ AGREE_RATIO (validate_mitsuba.py) × the two renderers' noise +
-BLOCK_BIAS². The bias is what the two readings of the normal maps differ by. Measured at 128×96,
-64 samples a half: textured_room's means 0.15 % apart, its blocks 2.7 % RMS apart against 1.5 %
-noise (ratio 3.2), the floor near the camera 8–13 % darker in raysplat where its normal map
-turns the planks' normals; the same room without its normal maps 0.6 % apart, blocks at 2.0 ×
-noise; with its floor a plain dielectric of roughness 0.3 (no maps) 0.8 % and 1.9 × noise
-(glTF's fresnel_mix in raysplat's place of Cycles' albedo scaling would make that floor 5–12 %
-brighter, 4.1 × noise). So the block check bounds the difference the normal maps make,
-BLOCK_BIAS.
+BLOCK_BIAS², a stated 1 % RMS. Measured at 128×96, 64 samples a half: textured_room's means
+0.6 % apart, its blocks 2.1 % RMS apart against 1.8 % noise (ratio 1.40); with Cycles at 256
+samples a half, 1.2 % RMS is left besides the noise. Reading the normal maps otherwise than
+Cycles does shows here: one normal for both lobes, the geometric one where the mapped normal
+faces away from the viewer, leaves the floor near the camera 8–13 % darker (3.2 × noise); glTF's
+fresnel_mix in the place of Cycles' albedo scaling makes a floor of roughness 0.3 5–12 %
+brighter.
 
 Cycles is set up as raysplat renders: the glTF camera at the image size, a box pixel filter of
 one pixel, every bounce up to raysplat's 32 path vertices, no clamping, no glossy filter, no
@@ -40,13 +39,10 @@ Everything else is the importer's Principled BSDF as it makes it: the dielectric
 F0 = 0.04 over the diffuse (raysplat layers them as Cycles does, docs/design.md §3), metals, normal maps (tangents by MikkTSpace, green up; Cycles
 4.2 shades a bump-mapped diffuse closure with Chiang et al.'s 2019 bump shadowing, as raysplat
 does: a Lambert plane under a sun, its normal map tilted 30° towards it, renders at 0.4380,
-0.9194 and 0.7648 of plain n·l at three sun elevations, the term's values to 4 digits; where
-a mapped normal faces away from the viewer raysplat shades with the geometric normal and
-Cycles does not: bending raysplat's normal only as far as the viewer needs instead took the
-all-Lambert variant of this scene from 2.6 % to 1.5 % above Cycles but the scene itself from
-2.4 % above to 2 % below, its glossy floor then grazing, so Cycles' diffuse and specular
-closures read the normal differently there and raysplat, with one normal for both, keeps the
-fallback), the
+0.9194 and 0.7648 of plain n·l at three sun elevations, the term's values to 4 digits; its
+diffuse closure keeps the mapped normal where it faces away from the viewer and its specular
+closures bend it until the viewer's reflection clears the surface, as raysplat does,
+docs/design.md §3), the
 emissive texture and strength, COLOR_0 times the base colour, alpha MASK by a math node.
 
 Exit status: 0 PASS, 1 FAIL, 77 skipped (bpy cannot be imported; with
@@ -65,7 +61,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from blender_check import FAIL, ROOT, begin_check, exit_without_teardown, reexec_under_bpy_python  # noqa: E402
 
 MEAN_TOLERANCE = 0.03
-BLOCK_BIAS = 0.03  # RMS relative difference of the block means allowed besides noise (docstring)
+BLOCK_BIAS = 0.01  # RMS relative difference of the block means allowed besides noise (docstring)
 MAX_VERTICES = 32  # raysplat's --max-depth default: its longest path
 SEEDS = (1, 2)
 

@@ -1,6 +1,7 @@
 // material_test: the glTF metallic-roughness model's textures against independent answers —
 // the analytic radiance of normal-mapped patches under a directional light (with given and
-// with computed tangents, and shadowed at a grazing light as Chiang et al. 2019), photons'
+// with computed tangents, seen from behind the mapped normal, and shadowed at a grazing light as
+// Chiang et al. 2019), the GGX lobe's normal bent to reflect the viewer above the surface, photons'
 // adjoint bounce under a shading normal, the dielectric
 // mix against its definition and the white furnace, and equivalences: COLOR_0 × white against the same colour as a
 // factor, a metallic factor of 1 × a texture saying metal 0 against metal 0, a texture
@@ -180,37 +181,97 @@ TEST(NormalMap, InterpolatedNormalsAloneAreNotShadowed) {
     EXPECT_NEAR(L, plain, 1e-3f * plain);
 }
 
+// A mapped normal that faces away from the viewer still shades the diffuse lobe, which does not
+// depend on the viewer (as Cycles reads it): a patch whose normal map leans 60° away from a
+// grazing eye reflects albedo/π · E · (ns·l) × the bump shadowing, not the flat ng·l.
+TEST(NormalMap, ANormalFacingAwayFromTheViewerStillShadesTheDiffuse) {
+    const float albedo = 0.7f, s60 = std::sqrt(3.f) / 2.f, c60 = 0.5f;
+    Scene s;
+    const uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(albedo));
+    s.materials[m].normalTexture.texture = addTexture(s, 1, 1, {Vec4(0.5f * Vec3(s60, 0.f, c60) + 0.5f, 1.f)});
+    addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
+    planarUvs(s, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1));
+    s.tangents.assign(s.positions.size(), Vec4(0.f));
+    computeMissingTangents(s);
+    const Vec3 l = glm::normalize(Vec3(0.8f, 1.f, 0.f)), ns(s60, c60, 0.f), ng(0.f, 1.f, 0.f);
+    addSun(s, l);
+    RayAccel accel(s, 1);
+    LightSampler lights(s);
+    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(-1.f, 0.3f, 0.f);
+    ASSERT_LT(glm::dot(ns, glm::normalize(eye - target)), 0.f);
+    Sampler sampler(1, Stage::Test, 0);
+    const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+    const float expected = albedo / kPi * 3.f * glm::dot(ns, l) * bumpShadowing(ng, ns, l);
+    const float flat = albedo / kPi * 3.f * l.y;
+    EXPECT_NEAR(L, expected, 0.02f * expected) << "flat: " << flat;
+    EXPECT_GT(std::abs(expected - flat), 0.1f * flat);
+}
+
+// The GGX lobe of a mapped normal that would reflect the viewer into the surface takes the
+// normal, in the plane of ng and ns, that reflects it to just above the surface
+// (min(0.9·(wo·ng), 0.01) high); elsewhere the mapped normal itself.
+TEST(NormalMap, TheSpecularNormalReflectsTheViewerJustAboveTheSurface) {
+    const Vec3 ng(0.f, 0.f, 1.f);
+    int bent = 0;
+    for (float tilt : {0.2f, 0.6f, 1.0f, 1.3f})
+        for (float azimuth : {0.f, 1.f, 2.5f, 3.14159f, 4.f})
+            for (float elevation : {0.05f, 0.3f, 0.8f, 1.5f})
+                for (float viewAzimuth : {0.f, 1.5f, 3.f}) {
+                    const Vec3 ns(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
+                    const Vec3 wo(std::cos(elevation) * std::cos(viewAzimuth), std::cos(elevation) * std::sin(viewAzimuth),
+                                  std::sin(elevation));
+                    const float height = std::min(0.9f * wo.z, 0.01f);
+                    const Vec3 n = validSpecularNormal(ng, ns, wo);
+                    const float reflected = (2.f * glm::dot(wo, n) * n - wo).z;
+                    EXPECT_NEAR(glm::length(n), 1.f, 1e-5f);
+                    EXPECT_NEAR(glm::dot(n, glm::cross(ng, ns)), 0.f, 1e-5f) << "not in the plane of ng and ns";
+                    if ((2.f * glm::dot(wo, ns) * ns - wo).z >= height) {
+                        EXPECT_EQ(n, ns);
+                    } else {
+                        ++bent;
+                        EXPECT_NEAR(reflected, height, 2e-4f) << tilt << " " << azimuth << " " << elevation << " " << viewAzimuth;
+                        EXPECT_GT(glm::dot(n, wo), 0.f);
+                    }
+                }
+    EXPECT_GT(bent, 40);
+}
+
 // A photon bouncing off a normal-mapped surface carries flux per geometric area: the mean of
 // Bsdf::sample's Importance weights for light arriving from l is (|ns·l| / |ng·l|) × ∫ f(ωo, l)
 // |ng·ωo| dωo, the flux the camera's radiance f · |ns·l| leaves with (by quadrature over the
-// hemisphere). The radiance form f · |ns·ωo| / pdf misses it by 20–45 % here.
+// hemisphere). The radiance form f · |ns·ωo| / pdf misses it by 20–45 % here. With the normal
+// from a normal map, light leaves also towards directions below ns (its diffuse lobe does not
+// depend on the viewer, its GGX lobe bends its normal to each viewer): the photon reaches them.
 TEST(NormalMap, PhotonsBounceWithTheAdjointBsdf) {
-    Scene s;
-    const uint32_t m = addMaterial(s, MaterialKind::Mix, Vec3(0.7f, 0.6f, 0.5f));
-    s.materials[m].metallic = 0.f;
-    s.materials[m].roughness = 0.6f;
-    SurfacePoint sp;
-    sp.ng = Vec3(0, 0, 1);
-    sp.ns = glm::normalize(Vec3(0.5f, 0.f, 0.866f));
-    sp.material = m;
-    for (Vec3 l : {Vec3(0.7f, 0.1f, 0.5f), Vec3(-0.2f, 0.5f, 0.8f), Vec3(0.9f, -0.3f, 0.25f)}) {
-        l = glm::normalize(l);
-        Bsdf bsdf(s, sp, l);
-        const int n = 512;
-        double sampled = 0.0, quadrature = 0.0;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j) {
-                const Vec2 u((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n));
-                const float uLobe = (float((i * 7 + j * 13) % n) + 0.5f) / float(n);
-                const BsdfSample b = bsdf.sample(l, uLobe, u, Transport::Importance);
-                if (b.pdf > 0.f) sampled += double(b.weight.x);
-                const float c = u.x, phi = 2.f * kPi * u.y, r = std::sqrt(1.f - c * c);
-                const Vec3 wo(r * std::cos(phi), r * std::sin(phi), c);
-                quadrature += double(bsdf.eval(wo, l).x) * c;
-            }
-        sampled /= double(n) * double(n);
-        quadrature *= 2.0 * kPi / (double(n) * double(n)) * std::abs(glm::dot(sp.ns, l)) / std::abs(glm::dot(sp.ng, l));
-        EXPECT_NEAR(sampled, quadrature, 0.01 * quadrature) << "l " << l.x << " " << l.y << " " << l.z;
+    for (const bool mapped : {false, true}) {
+        Scene s;
+        const uint32_t m = addMaterial(s, MaterialKind::Mix, Vec3(0.7f, 0.6f, 0.5f));
+        s.materials[m].metallic = 0.f;
+        s.materials[m].roughness = 0.6f;
+        if (mapped) s.materials[m].normalTexture.texture = addTexture(s, 1, 1, {Vec4(0.5f, 0.5f, 1.f, 1.f)});
+        SurfacePoint sp;
+        sp.ng = Vec3(0, 0, 1);
+        sp.ns = glm::normalize(Vec3(0.5f, 0.f, 0.866f));
+        sp.material = m;
+        for (Vec3 l : {Vec3(0.7f, 0.1f, 0.5f), Vec3(-0.2f, 0.5f, 0.8f), Vec3(0.9f, -0.3f, 0.25f)}) {
+            l = glm::normalize(l);
+            Bsdf bsdf(s, sp, l);
+            const int n = 512;
+            double sampled = 0.0, quadrature = 0.0;
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    const Vec2 u((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n));
+                    const float uLobe = (float((i * 7 + j * 13) % n) + 0.5f) / float(n);
+                    const BsdfSample b = bsdf.sample(l, uLobe, u, Transport::Importance);
+                    if (b.pdf > 0.f) sampled += double(b.weight.x);
+                    const float c = u.x, phi = 2.f * kPi * u.y, r = std::sqrt(1.f - c * c);
+                    const Vec3 wo(r * std::cos(phi), r * std::sin(phi), c);
+                    quadrature += double(bsdf.eval(wo, l).x) * c;
+                }
+            sampled /= double(n) * double(n);
+            quadrature *= 2.0 * kPi / (double(n) * double(n)) * std::abs(glm::dot(sp.ns, l)) / std::abs(glm::dot(sp.ng, l));
+            EXPECT_NEAR(sampled, quadrature, 0.01 * quadrature) << "mapped " << mapped << " l " << l.x << " " << l.y << " " << l.z;
+        }
     }
 }
 

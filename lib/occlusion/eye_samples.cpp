@@ -58,21 +58,21 @@ uint32_t encodeRgb9e5(const Vec3& c) {
     return q(r) | q(g) << 9 | q(b) << 18 | uint32_t(exponent) << 27;
 }
 
-Vec3 EyeSamples::weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const {
+Vec3 EyeSamples::weightedF(size_t i, const Vec3& wi, float cosI, float diffuseShadowing) const {
     const uint32_t r = bsdf[i];
-    return isGlossy(r) ? glossyF(r, n, wi, cosI, diffuseShadowing) : decodeRgb9e5(r) * diffuseShadowing;
+    return isGlossy(r) ? glossyF(r, wi, cosI, diffuseShadowing) : decodeRgb9e5(r) * diffuseShadowing;
 }
 
-Vec3 EyeSamples::glossyF(uint32_t r, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const {
+Vec3 EyeSamples::glossyF(uint32_t r, const Vec3& wi, float cosI, float diffuseShadowing) const {
     const GlossyLobe& lobe = lobes[lobeIndex(r)];
     Vec3 f = decodeRgb9e5(lobe.diffuse) * diffuseShadowing;
-    const Vec3 wo = decodeUnit(lobe.toViewer);
-    const float cosO = glm::dot(n, wo);
-    if (cosO <= 0.f) return f;
+    const Vec3 wo = decodeUnit(lobe.toViewer), m = decodeUnit(lobe.normal);
+    const float cosO = glm::dot(m, wo), cosIm = glm::dot(m, wi);
+    if (cosO <= 0.f || cosIm <= 0.f) return f;
     const Vec3 h = glm::normalize(wo + wi);
-    const GgxReflection g = ggxReflection(cosO, cosI, glm::dot(n, h), glm::dot(wo, h), lobe.alpha);
+    const GgxReflection g = ggxReflection(cosO, cosIm, glm::dot(m, h), glm::dot(wo, h), lobe.alpha);
     const Vec3 specular = decodeRgb9e5(lobe.specular), weight = decodeRgb9e5(lobe.weight);
-    return f + (specular + (weight - specular) * g.m5) * g.dg;
+    return f + (specular + (weight - specular) * g.m5) * (g.dg * (cosIm / cosI));
 }
 
 void EyeSamples::add(const Vec3& p, const Vec3& ns, const Vec3& ng, bool bent, uint32_t px, const Vec3& diffuse,

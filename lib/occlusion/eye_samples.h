@@ -51,6 +51,7 @@ struct GlossyLobe {
     uint32_t specular;  // RGB9E5: weight × Fresnel at normal incidence f0
     uint32_t weight;    // RGB9E5: weight (Schlick: weight·f0 + (weight − weight·f0)·(1 − cos)^5)
     uint32_t toViewer;  // encodeUnit
+    uint32_t normal;    // encodeUnit: the GGX lobe's normal seen from the viewer (Bsdf::specularNormal)
     float alpha;        // GGX α
 };
 
@@ -75,11 +76,12 @@ struct EyeSamples {
     static uint32_t lobeIndex(uint32_t bsdf) { return bsdf & ((1u << 27) - 1u); }
 
     // weight × f_r(wi, to the viewer) of sample i for light leaving along the unit direction
-    // wi, given its decoded shading normal n, cosI = n·wi > 0 and the diffuse lobe's
+    // wi, given cosI = n·wi > 0 for its decoded shading normal n and the diffuse lobe's
     // bumpShadowing (bsdf.h's eval, from the stored parts).
-    Vec3 weightedF(size_t i, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const;
-    // weightedF of a glossy sample, given its `bsdf` word.
-    Vec3 glossyF(uint32_t bsdf, const Vec3& n, const Vec3& wi, float cosI, float diffuseShadowing) const;
+    Vec3 weightedF(size_t i, const Vec3& wi, float cosI, float diffuseShadowing) const;
+    // weightedF of a glossy sample, given its `bsdf` word: its GGX term scaled by the cosine
+    // to the lobe's own normal over cosI, as Bsdf::eval does.
+    Vec3 glossyF(uint32_t bsdf, const Vec3& wi, float cosI, float diffuseShadowing) const;
 
     // diffuse: weight × the Lambert f; lobe: the glossy part, if any (its diffuse is set here).
     void add(const Vec3& p, const Vec3& shadingNormal, const Vec3& geomNormal, bool bumped, uint32_t pixel,

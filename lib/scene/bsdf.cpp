@@ -23,8 +23,6 @@ float ggxD(float cosH, float alpha) {
     return a2 / (kPi * d * d);
 }
 
-float ggxD(const Vec3& h, float alpha) { return ggxD(h.z, alpha); }
-
 float ggxLambda(float cosTheta, float alpha) {
     float c2 = cosTheta * cosTheta;
     if (c2 >= 1.f) return 0.f;
@@ -104,6 +102,25 @@ float fresnelDielectric(float cosThetaI, float eta) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
+Vec3 validSpecularNormal(const Vec3& ng, const Vec3& ns, const Vec3& wo) {
+    const float cosGeometric = glm::dot(wo, ng);
+    const float height = std::min(0.9f * cosGeometric, 0.01f);
+    if (glm::dot(reflect(wo, ns), ng) >= height) return ns;
+    // The normal n = √(1−s)·x + √s·ng, in the plane of ng and x (ns's direction along the
+    // surface), reflects wo to the height 2(n·wo)(n·ng) − wo·ng. Setting that to `height` and
+    // squaring gives a·s² − b·s + c/4 = 0; of its roots, the larger where wo leans against x
+    // (wx < 0: 2·wx·√(s(1−s)) must then be negative), the smaller where it leans with it.
+    const Vec3 along = ns - glm::dot(ns, ng) * ng;
+    const float length = glm::length(along);
+    if (!(length > 1e-6f)) return ng;
+    const Vec3 x = along / length;
+    const float wx = glm::dot(wo, x), wz = cosGeometric;
+    const float a = wx * wx + wz * wz, b = a + wz * height, c = (height + wz) * (height + wz);
+    const float root = std::sqrt(std::max(b * b - a * c, 0.f));
+    const float s = std::clamp((wx < 0.f ? b + root : b - root) / (2.f * a), 0.f, 1.f);
+    return std::sqrt(1.f - s) * x + std::sqrt(s) * ng;
+}
+
 Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
     : material_(&scene.materials[sp.material]),
       albedo_(scene.albedo(sp.material, sp.attr, sp.footprint, sp.tri)),
@@ -112,10 +129,13 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
     bool outside = glm::dot(wo, sp.ng) >= 0.f;
     ng_ = outside ? sp.ng : -sp.ng;
     Vec3 ns = outside ? sp.ns : -sp.ns;
-    // A shading normal that puts wo below the surface would make light leak: use ng there.
-    if (glm::dot(ns, wo) <= 1e-4f || glm::dot(ns, ng_) <= 0.f) ns = ng_;
+    // An interpolated normal that puts wo below the surface would make light leak: use ng
+    // there. A mapped one stays: its diffuse lobe does not depend on wo, and its GGX lobe takes
+    // a normal that wo sees (specularNormal).
+    const bool mapped = m.normalTexture.present() && !m.isSpecular();
+    if (glm::dot(ns, ng_) <= 0.f || (!mapped && glm::dot(ns, wo) <= 1e-4f)) ns = ng_;
     frame_ = Frame(ns);
-    bumped_ = m.normalTexture.present() && ns != ng_;
+    bumped_ = mapped && ns != ng_;
     eta_ = outside ? m.ior : 1.f / m.ior;
     // Metallic and roughness at the point (the factors × the metallicRoughnessTexture).
     const Vec2 mr = m.metallicRoughnessTexture.present() ? scene.metallicRoughness(sp.material, sp.attr)
@@ -139,38 +159,44 @@ float Bsdf::diffuseScale(float cosO) const {
     return layered_ ? diffuseWeight_ * (1.f - dielectricLayerAlbedo(cosO, alpha_)) : diffuseWeight_;
 }
 
-float Bsdf::specularProbability(const Vec3& woLocal) const {
+float Bsdf::specularProbability(float cosO) const {
     if (!hasGgx_) return 0.f;
     if (diffuseWeight_ <= 0.f) return 1.f;
-    float s = luminance(schlick(f0_, woLocal.z));
+    float s = luminance(schlick(f0_, std::max(cosO, 0.f)));
     float d = diffuseWeight_ * luminance(albedo_);
     return std::clamp(s / std::max(s + d, 1e-6f), 0.05f, 0.95f);
 }
 
 Vec3 Bsdf::eval(const Vec3& woW, const Vec3& wiW) const {
     if (isDelta()) return Vec3(0.f);
-    if (glm::dot(wiW, ng_) <= 0.f) return Vec3(0.f);  // opaque: no light from behind
-    Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
-    if (wo.z <= 0.f || wi.z <= 0.f) return Vec3(0.f);
-    Vec3 f = diffuseScale(wo.z) * albedo_ * kInvPi * (bumped_ ? bumpShadowing(ng_, frame_.n, wiW) : 1.f);
-    if (hasGgx_) {
-        Vec3 h = glm::normalize(wo + wi);
-        GgxReflection r = ggxReflection(wo.z, wi.z, h.z, glm::dot(wo, h), alpha_);
-        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * r.dg;
+    if (glm::dot(wiW, ng_) <= 0.f || glm::dot(woW, ng_) <= 0.f) return Vec3(0.f);  // opaque
+    const Vec3& n = frame_.n;
+    const Vec3 m = specularNormal(woW);
+    const float cosI = glm::dot(wiW, n), cosO = glm::dot(woW, m);
+    if (cosI <= 0.f || (!bumped_ && cosO <= 0.f)) return Vec3(0.f);
+    Vec3 f = diffuseScale(cosO) * albedo_ * kInvPi * (bumped_ ? bumpShadowing(ng_, n, wiW) : 1.f);
+    const float cosIm = bumped_ ? glm::dot(wiW, m) : cosI;
+    if (hasGgx_ && cosO > 0.f && cosIm > 0.f) {
+        const Vec3 h = glm::normalize(woW + wiW);
+        const GgxReflection r = ggxReflection(cosO, cosIm, glm::dot(m, h), glm::dot(woW, h), alpha_);
+        f += (f0_ + (Vec3(1.f) - f0_) * r.m5) * (r.dg * (cosIm / cosI));
     }
     return f;
 }
 
-float Bsdf::pdf(const Vec3& woW, const Vec3& wiW) const {
+float Bsdf::pdf(const Vec3& woW, const Vec3& wiW) const { return lobePdf(woW, wiW, frame_.n); }
+
+float Bsdf::lobePdf(const Vec3& woW, const Vec3& wiW, const Vec3& diffuseNormal) const {
     if (isDelta()) return 0.f;
-    if (glm::dot(wiW, ng_) <= 0.f) return 0.f;
-    Vec3 wo = frame_.toLocal(woW), wi = frame_.toLocal(wiW);
-    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
-    float ps = specularProbability(wo);
-    float p = (1.f - ps) * wi.z * kInvPi;
-    if (ps > 0.f) {
-        Vec3 h = glm::normalize(wo + wi);
-        p += ps * ggxG1(wo, alpha_) * ggxD(h, alpha_) / (4.f * wo.z);
+    if (glm::dot(wiW, ng_) <= 0.f || glm::dot(woW, ng_) <= 0.f) return 0.f;
+    const Vec3 m = specularNormal(woW);
+    const float cosO = glm::dot(woW, m), cosI = glm::dot(wiW, diffuseNormal);
+    if (!bumped_ && (cosO <= 0.f || cosI <= 0.f)) return 0.f;
+    const float ps = specularProbability(cosO);
+    float p = (1.f - ps) * std::max(cosI, 0.f) * kInvPi;
+    if (ps > 0.f && cosO > 0.f && glm::dot(wiW, m) > 0.f) {
+        const Vec3 h = glm::normalize(woW + wiW);
+        p += ps * ggxG1(Vec3(0.f, 0.f, cosO), alpha_) * ggxD(glm::dot(m, h), alpha_) / (4.f * cosO);
     }
     return p;
 }
@@ -206,19 +232,26 @@ BsdfSample Bsdf::sample(const Vec3& woW, float uLobe, Vec2 u, Transport mode) co
         }
         return s;
     }
-    if (wo.z <= 0.f) return s;
-
-    Vec3 wi;
-    if (uLobe < specularProbability(wo)) {
-        Vec3 h = sampleGgxVisibleNormal(wo, alpha_, u);
-        wi = reflect(wo, h);
+    const Vec3 lobeNormal = specularNormal(woW);
+    const float cosO = glm::dot(woW, lobeNormal);
+    if (cosO <= 0.f && !bumped_) return s;
+    // A mapped normal's diffuse light leaves towards every direction above the geometric surface,
+    // also those below the mapped normal (eval(wi, wo) does not depend on where wi is): a photon
+    // leaving it is drawn around ng, which covers them all.
+    const bool leavesAnyway = mode == Transport::Importance && bumped_;
+    if (uLobe < specularProbability(cosO)) {
+        if (cosO <= 0.f) return s;
+        const Frame lobe = bumped_ ? Frame(lobeNormal) : frame_;
+        const Vec3 wol = lobe.toLocal(woW);
+        const Vec3 wi = reflect(wol, sampleGgxVisibleNormal(wol, alpha_, u));
         if (wi.z <= 0.f) return s;
+        s.wi = lobe.toWorld(wi);
     } else {
-        wi = sampleCosineHemisphere(u);
+        const Vec3 wi = sampleCosineHemisphere(u);
         if (wi.z <= 0.f) return s;
+        s.wi = (leavesAnyway ? Frame(ng_) : frame_).toWorld(wi);
     }
-    s.wi = frame_.toWorld(wi);
-    s.pdf = pdf(woW, s.wi);
+    s.pdf = lobePdf(woW, s.wi, leavesAnyway ? ng_ : frame_.n);
     if (s.pdf <= 0.f) return s;
     if (mode == Transport::Radiance) {
         s.weight = eval(woW, s.wi) * (std::abs(glm::dot(s.wi, frame_.n)) / s.pdf);

@@ -20,36 +20,57 @@ struct BsdfSample {
     bool delta = false;
 };
 
+// A normal-mapped GGX lobe's normal seen from wo (Cycles' reading of a bump-mapped specular
+// normal): the mapped normal ns where the mirror reflection of wo about it leaves above the
+// geometric surface by min(0.9·(wo·ng), 0.01) at least; else ns bent towards ng, in their plane,
+// until that reflection leaves at exactly that height. A normal map tilted away from the viewer
+// then keeps a highlight rather than reflecting into the surface. ng, ns, wo unit, on one side.
+Vec3 validSpecularNormal(const Vec3& ng, const Vec3& ns, const Vec3& wo);
+
 class Bsdf {
 public:
     // wo: unit direction away from the surface towards the previous vertex.
     Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo);
 
     bool isDelta() const { return material_->isSpecular(); }
-    Vec3 eval(const Vec3& wo, const Vec3& wi) const;  // 0 for delta materials
+    // 0 for delta materials. Where a normal map gives the GGX lobe a normal of its own
+    // (specularNormal), that lobe's term is scaled by (wi·its normal) / (wi·shadingNormal()), so
+    // that eval × |wi·shadingNormal()| is each lobe's f times its own cosine, as every caller
+    // takes it; light below the shading normal then reaches neither lobe.
+    Vec3 eval(const Vec3& wo, const Vec3& wi) const;
     float pdf(const Vec3& wo, const Vec3& wi) const;  // 0 for delta materials
     // u: one number picks the lobe (or the Fresnel branch), two more the direction.
     BsdfSample sample(const Vec3& wo, float uLobe, Vec2 u, Transport mode) const;
     Vec3 albedo() const { return albedo_; }
     // The parts eval() is made of, for eye samples that store them (eye.h's GlossyLobe).
     // The diffuse lobe's f towards the wo of the constructor (the viewer, for eye samples).
-    Vec3 diffuseReflectance() const { return diffuseScale(frame_.toLocal(wo_).z) * albedo_ * kInvPi; }
+    Vec3 diffuseReflectance() const { return diffuseScale(glm::dot(specularNormal(wo_), wo_)) * albedo_ * kInvPi; }
     bool hasGlossyLobe() const { return hasGgx_; }
     Vec3 fresnelAtNormal() const { return f0_; }
     float ggxAlpha() const { return alpha_; }
     const Vec3& shadingNormal() const { return frame_.n; }
+    // The GGX lobe's normal seen from wo: the shading normal, but where a normal map bent it
+    // (validSpecularNormal).
+    Vec3 specularNormal(const Vec3& wo) const {
+        return bumped_ ? validSpecularNormal(ng_, frame_.n, wo) : frame_.n;
+    }
     // Whether a normal map bends the shading normal: only then does the diffuse lobe take
-    // bumpShadowing (interpolated normals alone do not, as in Cycles and Mitsuba).
+    // bumpShadowing (interpolated normals alone do not, as in Cycles and Mitsuba), and the GGX
+    // lobe a normal of its own.
     bool bumped() const { return bumped_; }
 
 private:
-    float specularProbability(const Vec3& woLocal) const;
+    // cosO: wo's cosine to the GGX lobe's normal.
+    float specularProbability(float cosO) const;
+    // pdf() of sample() with its diffuse lobe drawn around diffuseNormal.
+    float lobePdf(const Vec3& wo, const Vec3& wi, const Vec3& diffuseNormal) const;
     // The diffuse lobe's weight seen from a direction of cosine cosO to the shading normal:
     // (1 − metallic), under the mix's dielectric layer times 1 − that layer's albedo.
     float diffuseScale(float cosO) const;
 
     const Material* material_;
-    Frame frame_;      // around the shading normal, flipped to wo's side for opaque materials
+    Frame frame_;      // around the shading normal, flipped to wo's side for opaque materials;
+                       // a mapped one (bumped_) may face away from wo: only the GGX lobe needs wo
     Vec3 ng_;          // geometric normal, same side as frame_.n for opaque materials
     Vec3 albedo_;      // base colour at the point
     Vec3 f0_;          // Fresnel at normal incidence of the GGX / mirror lobe

@@ -86,7 +86,7 @@ public:
                 const Vec3 diffuse = weight * bsdf.diffuseReflectance();
                 if (bsdf.hasGlossyLobe()) {
                     GlossyLobe lobe{0, encodeRgb9e5(weight * bsdf.fresnelAtNormal()), encodeRgb9e5(weight), encodeUnit(wo),
-                                    bsdf.ggxAlpha()};
+                                    encodeUnit(bsdf.specularNormal(wo)), bsdf.ggxAlpha()};
                     row.add(sp.p, bsdf.shadingNormal(), ng, bsdf.bumped(), pixel, diffuse, &lobe);
                 } else {
                     row.add(sp.p, bsdf.shadingNormal(), ng, bsdf.bumped(), pixel, diffuse);

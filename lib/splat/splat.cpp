@@ -225,7 +225,7 @@ public:
             return;
         }
         // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
-        const Vec3 f = samples_.weightedF(i, n, -w, -cosTheta, shadowing(i));
+        const Vec3 f = samples_.weightedF(i, -w, -cosTheta, shadowing(i));
         const float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
         const Vec3 c = f * ray_.flux * scale;
         if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
@@ -283,7 +283,7 @@ private:
     }
 #if defined(__SSE2__)
     void receive4(const uint32_t* index, const float* visibility, int count);
-    Lanes4 weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const;
+    Lanes4 weightedF4(const uint32_t lane[4], uint32_t live, __m128 minusCos) const;
     // bsdf.h's bumpShadowing of sample i for the photon, 1 where no normal map bent its normal.
     float shadowing(uint32_t i) const {
         const uint16_t ns = samples_.normal[i], ng = samples_.geomNormal[i];
@@ -350,7 +350,7 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
                                               count > 3 ? visibility[3] : 1.f)
                                 : _mm_set1_ps(1.f);
     const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
-    const Lanes4 f = weightedF4(lane, live, n, minusCos);
+    const Lanes4 f = weightedF4(lane, live, minusCos);
     const Lanes4 c{_mm_mul_ps(_mm_mul_ps(f.x, four_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(f.y, four_.flux[1]), scale),
                   _mm_mul_ps(_mm_mul_ps(f.z, four_.flux[2]), scale)};
     // Non-negative and finite.
@@ -364,7 +364,7 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
 
 // The samples' w · f_r: a Lambert sample's is stored whole (decodeRgb9e5, four lanes at once);
 // a glossy one's lobe is evaluated lane by lane.
-Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lanes4& n, __m128 minusCos) const {
+Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, __m128 minusCos) const {
     const uint32_t* bsdf = samples_.bsdf.data();
     const __m128i word = _mm_setr_epi32(int(bsdf[lane[0]]), int(bsdf[lane[1]]), int(bsdf[lane[2]]), int(bsdf[lane[3]]));
     const __m128i nine = _mm_set1_epi32(511);
@@ -378,12 +378,12 @@ Lanes4 PhotonSplat::weightedF4(const uint32_t lane[4], uint32_t live, const Lane
     f = {_mm_mul_ps(f.x, shares), _mm_mul_ps(f.y, shares), _mm_mul_ps(f.z, shares)};
     const uint32_t glossy = live & uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_srli_epi32(word, 27), _mm_set1_epi32(31)))));
     if (glossy) {
-        alignas(16) float nx[4], ny[4], nz[4], mc[4], fx[4], fy[4], fz[4];
-        _mm_store_ps(nx, n.x), _mm_store_ps(ny, n.y), _mm_store_ps(nz, n.z), _mm_store_ps(mc, minusCos);
+        alignas(16) float mc[4], fx[4], fy[4], fz[4];
+        _mm_store_ps(mc, minusCos);
         _mm_store_ps(fx, f.x), _mm_store_ps(fy, f.y), _mm_store_ps(fz, f.z);
         for (uint32_t bits = glossy; bits; bits &= bits - 1) {
             const int k = __builtin_ctz(bits);
-            const Vec3 g = samples_.glossyF(bsdf[lane[k]], Vec3(nx[k], ny[k], nz[k]), -ray_.dir, mc[k], share[k]);
+            const Vec3 g = samples_.glossyF(bsdf[lane[k]], -ray_.dir, mc[k], share[k]);
             fx[k] = g.x, fy[k] = g.y, fz[k] = g.z;
         }
         f = {_mm_load_ps(fx), _mm_load_ps(fy), _mm_load_ps(fz)};
