@@ -99,17 +99,31 @@ void addSun(Scene& s, const Vec3& l) {
     s.computeBounds();
 }
 
-// The radiance the path tracer sees at (x, 0, 0.5) from just above it (sampler stream `stream`).
-float radianceAt(const Scene& s, float x, uint64_t stream = 0) {
+// The radiance the path tracer sees at (x, 0, 0.5) from target + toEye, by default just above it
+// (sampler stream `stream`).
+float radianceAt(const Scene& s, float x, uint64_t stream = 0, Vec3 toEye = Vec3(0.2f, 1.f, 0.1f)) {
     RayAccel accel(s, 1);
     LightSampler lights(s);
-    const Vec3 target(x, 0.f, 0.5f), eye = target + Vec3(0.2f, 1.f, 0.1f);
+    const Vec3 target(x, 0.f, 0.5f), eye = target + toEye;
     Sampler sampler(1, Stage::Test, stream);
     return tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
 }
 
 // The grazing light of the bump-shadowing tests.
 const Vec3 kGrazing = glm::normalize(Vec3(0.95f, 0.2f, 0.f));
+
+// A 1 m Lambert patch in y = 0 whose normal map leans its normal towards +T = +X: (s, 0, c) in
+// tangent space, (s, c, 0) in the world; tangents computed.
+Scene tiltedPatch(float albedo, float s, float c) {
+    Scene scene;
+    const uint32_t m = addMaterial(scene, MaterialKind::Lambert, Vec3(albedo));
+    scene.materials[m].normalTexture.texture = addTexture(scene, 1, 1, {Vec4(0.5f * Vec3(s, 0.f, c) + 0.5f, 1.f)});
+    addQuad(scene, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
+    planarUvs(scene, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1));
+    scene.tangents.assign(scene.positions.size(), Vec4(0.f));
+    computeMissingTangents(scene);
+    return scene;
+}
 
 TEST_P(NormalMap, TiltedNormalsGiveTheAnalyticRadiance) {
     const bool givenTangents = GetParam();
@@ -147,13 +161,7 @@ INSTANTIATE_TEST_SUITE_P(GivenAndComputedTangents, NormalMap, ::testing::Values(
 // as here, more than the flat patch receives.
 TEST(NormalMap, GrazingLightIsShadowedAsChiang2019) {
     const float albedo = 0.7f, s30 = 0.5f, c30 = std::sqrt(3.f) / 2.f;
-    Scene s;
-    const uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(albedo));
-    s.materials[m].normalTexture.texture = addTexture(s, 1, 1, {Vec4(0.5f * Vec3(s30, 0.f, c30) + 0.5f, 1.f)});
-    addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
-    planarUvs(s, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1));
-    s.tangents.assign(s.positions.size(), Vec4(0.f));
-    computeMissingTangents(s);
+    Scene s = tiltedPatch(albedo, s30, c30);
     const Vec3 l = kGrazing, ns(s30, c30, 0.f), ng(0.f, 1.f, 0.f);
     addSun(s, kGrazing);
     const float L = radianceAt(s, 0.5f);
@@ -186,21 +194,12 @@ TEST(NormalMap, InterpolatedNormalsAloneAreNotShadowed) {
 // grazing eye reflects albedo/π · E · (ns·l) × the bump shadowing, not the flat ng·l.
 TEST(NormalMap, ANormalFacingAwayFromTheViewerStillShadesTheDiffuse) {
     const float albedo = 0.7f, s60 = std::sqrt(3.f) / 2.f, c60 = 0.5f;
-    Scene s;
-    const uint32_t m = addMaterial(s, MaterialKind::Lambert, Vec3(albedo));
-    s.materials[m].normalTexture.texture = addTexture(s, 1, 1, {Vec4(0.5f * Vec3(s60, 0.f, c60) + 0.5f, 1.f)});
-    addQuad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m);
-    planarUvs(s, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1));
-    s.tangents.assign(s.positions.size(), Vec4(0.f));
-    computeMissingTangents(s);
+    Scene s = tiltedPatch(albedo, s60, c60);
     const Vec3 l = glm::normalize(Vec3(0.8f, 1.f, 0.f)), ns(s60, c60, 0.f), ng(0.f, 1.f, 0.f);
     addSun(s, l);
-    RayAccel accel(s, 1);
-    LightSampler lights(s);
-    const Vec3 target(0.5f, 0.f, 0.5f), eye = target + Vec3(-1.f, 0.3f, 0.f);
-    ASSERT_LT(glm::dot(ns, glm::normalize(eye - target)), 0.f);
-    Sampler sampler(1, Stage::Test, 0);
-    const float L = tracePath(s, accel, lights, eye, glm::normalize(target - eye), 4, sampler).total().x;
+    const Vec3 toEye(-1.f, 0.3f, 0.f);
+    ASSERT_LT(glm::dot(ns, toEye), 0.f);
+    const float L = radianceAt(s, 0.5f, 0, toEye);
     const float expected = albedo / kPi * 3.f * glm::dot(ns, l) * bumpShadowing(ng, ns, l);
     const float flat = albedo / kPi * 3.f * l.y;
     EXPECT_NEAR(L, expected, 0.02f * expected) << "flat: " << flat;
