@@ -108,14 +108,14 @@ PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
     return out;
 }
 
-// The scale at which the first pass keeps its probed quarter's light, for the scale m chosen.
+// The scale at which the first pass keeps its probed share's light, for the scale m chosen.
 float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
 
-// The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a quarter of
-// its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
+// The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a share (half)
+// of its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
 // each; the halves are summed at rank 0, which chooses the scale m and tells the others. The
-// pass's own indirect light is then the quarter's, at whichever of 1 and ½ is nearer m, and the
-// other three quarters' at m (until the deadline, where there is one).
+// pass's own indirect light is then the share's, at whichever of 1 and ½ is nearer m, and the
+// rest's at m (until the deadline, where there is one).
 class KernelScaleProbeStep {
 public:
     KernelScaleProbeStep(const RenderContext& c, const PassTargets& targets, const EyePass& eye, const SplatSettings& splat,
@@ -127,18 +127,18 @@ public:
     // `sum` and returns the scale chosen; `covered`: the paths whose indirect photons it splatted.
     float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
               const std::function<bool()>& timeUp, uint64_t& covered) {
-        const size_t quarter = indirect.rays.size() / KernelScaleProbe::kShare;
+        const size_t share = indirect.rays.size() / KernelScaleProbe::kShare;
         FixedFilm parts[4];  // A, B, C, D: their indirect layer only
         std::vector<int64_t> slots[4];
-        double seconds[2];  // the quarter's splat at 1 and at ½, before the gathers
+        double seconds[2];  // the share's splat at 1 and at ½, before the gathers
         for (int f = 0; f < 2; ++f) {
             Timer t;
-            const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, quarter), kPhotonIndirect, f ? 0.5f : 1.f, ps);
+            const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, share), kPhotonIndirect, f ? 0.5f : 1.f, ps);
             for (int h = 0; h < 2; ++h) {
                 FixedFilm& part = parts[2 * f + h];
                 part.width = c_.width, part.height = c_.height;
                 part.buffers[kIndirect].assign(values_, 0);
-                targets_.land(slice(scaled, h ? quarter / 2 : 0, h ? scaled.rays.size() : quarter / 2), splat_, part,
+                targets_.land(slice(scaled, h ? share / 2 : 0, h ? scaled.rays.size() : share / 2), splat_, part,
                               slots[2 * f + h], f == 0 ? &totals_.splat : nullptr, f == 0 ? &totals_.coverage : nullptr);
             }
             seconds[f] = t.seconds();
@@ -148,7 +148,7 @@ public:
         targets_.gather({&slots[0]}, {&parts[0]}, splat_);
         const double gather = gathering.seconds();
         targets_.gather({&slots[1], &slots[2], &slots[3]}, {&parts[1], &parts[2], &parts[3]}, splat_);
-        std::vector<int64_t> mine[2];  // this rank's light of the quarter at 1 and at ½
+        std::vector<int64_t> mine[2];  // this rank's light of the share at 1 and at ½
         for (int j = 0; j < 4; ++j) {
             std::vector<int64_t>& light = parts[j].buffers[kIndirect];
             mine[j / 2].resize(values_);
@@ -168,7 +168,7 @@ public:
         FixedFilm part;  // the splat's layers only
         part.width = c_.width, part.height = c_.height;
         for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
-        covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, quarter, indirect.rays.size()), kPhotonIndirect, m, ps),
+        covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, share, indirect.rays.size()), kPhotonIndirect, m, ps),
                                  splat_, part, &totals_.splat, &totals_.coverage, timeUp);
         sum.add(part);
         return m;
@@ -179,7 +179,7 @@ public:
 
     // Ray `index` of the first pass's photons (path order, before coverage) as that pass
     // splatted it under the probe, the scale m chosen: in its part (the other classes, the
-    // probed quarter of the indirect ones or the rest), at that part's scale.
+    // probed share of the indirect ones or the rest), at that part's scale.
     static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
                                 const PhotonSettings& ps) {
         PhotonMap part = traced;
@@ -192,11 +192,11 @@ public:
             part.rays.push_back(traced.rays[i]);
         }
         if (indirect) {
-            const size_t quarter = part.rays.size() / KernelScaleProbe::kShare;
-            const bool probed = at < quarter;
-            part = scaledKernels(c.scene, probed ? slice(part, 0, quarter) : slice(part, quarter, part.rays.size()),
+            const size_t share = part.rays.size() / KernelScaleProbe::kShare;
+            const bool probed = at < share;
+            part = scaledKernels(c.scene, probed ? slice(part, 0, share) : slice(part, share, part.rays.size()),
                                  kPhotonIndirect, probed ? keptProbeScale(m) : m, ps);
-            at -= probed ? 0 : quarter;
+            at -= probed ? 0 : share;
         }
         return part.rays[at];
     }
@@ -223,7 +223,7 @@ private:
             plan.timed = true;
             plan.secondsLeft = c_.cfg.timeLimit - whole.seconds();
             plan.passOther = other;
-            // a + b·h² for the quarter, from its two splats (b: the part that grows with the
+            // a + b·h² for the share, from its two splats (b: the part that grows with the
             // kernel's area), then for all the indirect photons, and a pass's one gather.
             const double b = std::max(0.0, seconds[0] - seconds[1]) * 4.0 / 3.0, a = std::max(0.0, seconds[0] - b);
             plan.splatFixed = a * KernelScaleProbe::kShare + gather;

@@ -21,7 +21,7 @@ KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int6
     KernelScaleProbe p;
     for (size_t i = 0; i < light.size(); ++i) {
         const double w = 1.0 / (double(light[i]) * light[i] + 0.01);
-        const double k = KernelScaleProbe::kShare / fixedScale;  // each half of the quarter as the whole pass
+        const double k = KernelScaleProbe::kShare / fixedScale;  // the flux × kShare
         const double A = double(a[i]) * k, B = double(b[i]) * k, C = double(c[i]) * k, D = double(d[i]) * k;
         p.noise += w * (A - B) * (A - B) / KernelScaleProbe::kShare;
         p.finerNoise += w * (C - D) * (C - D) / KernelScaleProbe::kShare;
@@ -45,10 +45,10 @@ double noiseExponent(const KernelScaleProbe& p) {
 double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan& plan, float m) {
     double passes = plan.passes;
     if (plan.timed) {
-        // The first pass still splats three quarters of its indirect photons at m. Only whole
+        // The first pass still splats the rest of its indirect photons at m. Only whole
         // passes are begun; the pass time is known to some ±15 %, so the passes that fit are
         // averaged over that, lest the choice turn on whether one more just fits.
-        const double left = std::max(0.0, plan.secondsLeft - 0.75 * splatSeconds(plan, m)), pass = passSeconds(plan, m);
+        const double left = std::max(0.0, plan.secondsLeft - (1.0 - 1.0 / KernelScaleProbe::kShare) * splatSeconds(plan, m)), pass = passSeconds(plan, m);
         double fit = 0.0;
         for (double f : {0.85, 1.0, 1.15}) fit += pass > 0.0 ? std::floor(left / (pass * f)) / 3.0 : 0.0;
         passes = 1.0 + plan.passesPerRound * fit;
@@ -71,7 +71,7 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
 float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
     if (!(probe.biasChange > 0.0)) return 1.f;
     // 2^(−k/20), k = −kLargerSteps … 40: ¼ to kMaxKernelScale in steps of 3.5 %. Larger kernels
-    // only where a blur was measured and extrapolates small: where none shows in the quarter's
+    // only where a blur was measured and extrapolates small: where none shows in the share's
     // noise (direct_light, one seed in two) it may still be there, and 1.46 gave 1.34 times the
     // error.
     float best = 1.f;
@@ -82,7 +82,7 @@ float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& pl
         const double e = expectedKernelError(probe, plan, m);
         if (e < least) least = e, best = m;
     }
-    // The estimates come from a quarter of a pass's photons, and heavy-tailed light (glossy
+    // The estimates come from half of a pass's photons, and heavy-tailed light (glossy
     // lobes, caustics) makes them noisy: a scale is kept only for a clear gain.
     return atOne >= kMinKernelGain * least ? best : 1.f;
 }
