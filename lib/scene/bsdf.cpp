@@ -31,7 +31,7 @@ float ggxLambda(float cosTheta, float alpha) {
 }
 float ggxLambda(const Vec3& w, float alpha) { return ggxLambda(w.z, alpha); }
 
-float ggxG1(const Vec3& w, float alpha) { return 1.f / (1.f + ggxLambda(w, alpha)); }
+float ggxG1(float cosTheta, float alpha) { return 1.f / (1.f + ggxLambda(cosTheta, alpha)); }
 
 Vec3 sampleGgxVisibleNormal(const Vec3& wo, float alpha, Vec2 u) {
     Vec3 vh = glm::normalize(Vec3(alpha * wo.x, alpha * wo.y, wo.z));
@@ -136,6 +136,7 @@ Bsdf::Bsdf(const Scene& scene, const SurfacePoint& sp, const Vec3& wo)
     if (glm::dot(ns, ng_) <= 0.f || (!mapped && glm::dot(ns, wo) <= 1e-4f)) ns = ng_;
     frame_ = Frame(ns);
     bumped_ = mapped && ns != ng_;
+    specularNormalOfWo_ = bumped_ ? validSpecularNormal(ng_, ns, wo) : ns;
     eta_ = outside ? m.ior : 1.f / m.ior;
     // Metallic and roughness at the point (the factors × the metallicRoughnessTexture).
     const Vec2 mr = m.metallicRoughnessTexture.present() ? scene.metallicRoughness(sp.material, sp.attr)
@@ -196,7 +197,7 @@ float Bsdf::lobePdf(const Vec3& woW, const Vec3& wiW, const Vec3& diffuseNormal)
     float p = (1.f - ps) * std::max(cosI, 0.f) * kInvPi;
     if (ps > 0.f && cosO > 0.f && glm::dot(wiW, m) > 0.f) {
         const Vec3 h = glm::normalize(woW + wiW);
-        p += ps * ggxG1(Vec3(0.f, 0.f, cosO), alpha_) * ggxD(glm::dot(m, h), alpha_) / (4.f * cosO);
+        p += ps * ggxG1(cosO, alpha_) * ggxD(glm::dot(m, h), alpha_) / (4.f * cosO);
     }
     return p;
 }

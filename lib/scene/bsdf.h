@@ -44,15 +44,16 @@ public:
     Vec3 albedo() const { return albedo_; }
     // The parts eval() is made of, for eye samples that store them (eye.h's GlossyLobe).
     // The diffuse lobe's f towards the wo of the constructor (the viewer, for eye samples).
-    Vec3 diffuseReflectance() const { return diffuseScale(glm::dot(specularNormal(wo_), wo_)) * albedo_ * kInvPi; }
+    Vec3 diffuseReflectance() const { return diffuseScale(glm::dot(specularNormalOfWo_, wo_)) * albedo_ * kInvPi; }
     bool hasGlossyLobe() const { return hasGgx_; }
     Vec3 fresnelAtNormal() const { return f0_; }
     float ggxAlpha() const { return alpha_; }
     const Vec3& shadingNormal() const { return frame_.n; }
     // The GGX lobe's normal seen from wo: the shading normal, but where a normal map bent it
-    // (validSpecularNormal).
+    // (validSpecularNormal; made once for the constructor's wo, which eval, pdf and sample see
+    // but for a photon's way out).
     Vec3 specularNormal(const Vec3& wo) const {
-        return bumped_ ? validSpecularNormal(ng_, frame_.n, wo) : frame_.n;
+        return !bumped_ || wo == wo_ ? specularNormalOfWo_ : validSpecularNormal(ng_, frame_.n, wo);
     }
     // Whether a normal map bends the shading normal: only then does the diffuse lobe take
     // bumpShadowing (interpolated normals alone do not, as in Cycles and Mitsuba), and the GGX
@@ -75,6 +76,7 @@ private:
     Vec3 albedo_;      // base colour at the point
     Vec3 f0_;          // Fresnel at normal incidence of the GGX / mirror lobe
     Vec3 wo_;          // the constructor's wo
+    Vec3 specularNormalOfWo_;  // specularNormal(wo_)
     float diffuseWeight_ = 0.f;  // (1 − metallic) for Lambert and mix
     bool hasGgx_ = false;
     bool layered_ = false;  // the mix: a diffuse lobe under a dielectric GGX layer
