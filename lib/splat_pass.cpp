@@ -215,7 +215,7 @@ private:
                        float(double(A[i] + B[i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
         }
         const KernelScaleProbe probe =
-            probeKernelScale(A, B, C, D, light, FixedFilm::kScale);
+            probeKernelScale(A, B, C, D, light, eye_.film.width, FixedFilm::kScale);
         KernelScalePlan plan;
         plan.passes = c_.cfg.renderPassCount();
         plan.alpha = c_.cfg.alpha;
@@ -237,6 +237,7 @@ private:
         c_.stats.setCount("kernel_probe_noise", probe.noise);
         c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
         c_.stats.setCount("kernel_probe_bias", probe.bias());
+        c_.stats.setCount("kernel_probe_bias_significance", probe.biasChangeSpread > 0.0 ? probe.biasChange / probe.biasChangeSpread : 0.0);
         return scale;
     }
 

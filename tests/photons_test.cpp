@@ -201,7 +201,7 @@ TEST(KernelScale, ProbeMeasuresBiasAndNoise) {
         bias += w * b1 * b1;
         noise += w * 2 * (sigma / 2) * (sigma / 2) / k;  // (A + B)'s variance, for the whole pass's photons
     }
-    const KernelScaleProbe p = probeKernelScale(a.data(), b.data(), c.data(), d.data(), light, fixed);
+    const KernelScaleProbe p = probeKernelScale(a.data(), b.data(), c.data(), d.data(), light, 256, fixed);
     EXPECT_NEAR(p.bias() / bias, 1.0, 0.03);
     EXPECT_NEAR(p.noise / noise, 1.0, 0.02);
     EXPECT_NEAR(p.finerNoise / (4 * noise), 1.0, 0.02);
@@ -231,6 +231,37 @@ TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
     timed.timed = true;
     timed.secondsLeft = 7.0, timed.passOther = 0.2, timed.splatScaled = 0.8;
     EXPECT_LT(chooseKernelScale(p, timed), chooseKernelScale(p, eight));
+}
+
+// The blur must stand out of its own noise. The same halves' difference spread over the image
+// (blur at every edge) is kept; put in one block of pixels (a few bright photons in one half) it
+// is refused, though S and the promised gain are the same.
+TEST(KernelScale, KeepsOnlyABlurAboveItsSpread) {
+    const int width = 128, height = 128, n = width * height * 3;
+    const double fixed = 4294967296.0, k = KernelScaleProbe::kShare;
+    auto at = [&](double v) { return int64_t(std::llround(v / 2 / k * fixed)); };  // a half of the share, as splatted
+    const std::vector<float> light(n, 1.f);
+    const std::vector<int64_t> flat(n, at(1.0));
+    // Spread: the first channel of every 8th pixel is 0.2 brighter at scale 1 than at ½, in every block.
+    std::vector<int64_t> a = flat;
+    for (int i = 0; i < n; i += 24) a[i] = at(1.2);
+    const KernelScaleProbe spread = probeKernelScale(a.data(), a.data(), flat.data(), flat.data(), light, width, fixed);
+    // One block: as much S, all of it in the 16 × 16 pixels at the corner (a term is w δ², w = 1/1.01).
+    const double delta = std::sqrt(spread.biasChange / (16 * 16 * 3) * 1.01);
+    std::vector<int64_t> a1 = flat;
+    for (int y = 0; y < 16; ++y)
+        for (int i = y * width * 3; i < (y * width + 16) * 3; ++i) a1[size_t(i)] = at(1.0 + delta);
+    const KernelScaleProbe block = probeKernelScale(a1.data(), a1.data(), flat.data(), flat.data(), light, width, fixed);
+    EXPECT_NEAR(block.biasChange / spread.biasChange, 1.0, 1e-3);
+    EXPECT_NEAR(spread.biasChange / spread.biasChangeSpread, std::sqrt(double(width / 16 * height / 16)), 1e-3);
+    EXPECT_NEAR(block.biasChange / block.biasChangeSpread, 1.0, 1e-3);
+    KernelScaleProbe noisy = spread, lumpy = block;
+    noisy.noise = lumpy.noise = spread.biasChange;  // a noise that makes smaller kernels pay
+    noisy.finerNoise = lumpy.finerNoise = 4.0 * spread.biasChange;
+    KernelScalePlan plan;
+    plan.passes = 16;
+    EXPECT_LT(chooseKernelScale(noisy, plan), 0.8f);
+    EXPECT_EQ(chooseKernelScale(lumpy, plan), 1.f);
 }
 
 // No bias measured: the kernels stay as they are. A bias measured small and a noise that falls

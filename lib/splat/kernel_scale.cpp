@@ -17,17 +17,25 @@ float passRadiusScale(int p, float alpha) {
 }
 
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
-                                  const std::vector<float>& light, double fixedScale) {
+                                  const std::vector<float>& light, int width, double fixedScale) {
     KernelScaleProbe p;
+    const int block = KernelScaleProbe::kBlock, blocksX = (width + block - 1) / block;
+    std::vector<double> blockChange;  // S's terms summed a block
     for (size_t i = 0; i < light.size(); ++i) {
         const double w = 1.0 / (double(light[i]) * light[i] + 0.01);
         const double k = KernelScaleProbe::kShare / fixedScale;  // the flux × kShare
         const double A = double(a[i]) * k, B = double(b[i]) * k, C = double(c[i]) * k, D = double(d[i]) * k;
         p.noise += w * (A - B) * (A - B) / KernelScaleProbe::kShare;
         p.finerNoise += w * (C - D) * (C - D) / KernelScaleProbe::kShare;
-        const double change = A + B - C - D, noise = A - C - (B - D);
-        p.biasChange += w * (change * change - noise * noise);
+        const double change = A + B - C - D, noise = A - C - (B - D), term = w * (change * change - noise * noise);
+        p.biasChange += term;
+        const size_t pixel = i / 3, x = pixel % size_t(width), y = pixel / size_t(width);
+        const size_t at = (y / block) * blocksX + x / block;
+        if (at >= blockChange.size()) blockChange.resize(at + 1, 0.0);
+        blockChange[at] += term;
     }
+    for (double t : blockChange) p.biasChangeSpread += t * t;
+    p.biasChangeSpread = std::sqrt(p.biasChangeSpread);
     return p;
 }
 
@@ -69,7 +77,7 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
 }
 
 float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
-    if (!(probe.biasChange > 0.0)) return 1.f;
+    if (!(probe.biasChange > 0.0) || !(probe.biasChange > kBiasSignificance * probe.biasChangeSpread)) return 1.f;
     // 2^(−k/20), k = −kLargerSteps … 40: ¼ to kMaxKernelScale in steps of 3.5 %. Larger kernels
     // only where a blur was measured and extrapolates small: where none shows in the share's
     // noise (direct_light, one seed in two) it may still be there, and 1.46 gave 1.34 times the
