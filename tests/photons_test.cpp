@@ -234,10 +234,10 @@ TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
 }
 
 // The blur must stand out of its own noise. The same halves' difference spread over the image
-// (blur at every edge) is kept; put in one block of pixels (a few bright photons in one half) it
-// is refused, though S and the promised gain are the same.
+// (blur at every edge) is kept; put in one of the kBlocks² blocks of the image (a few bright
+// photons in one half) it is refused, though S and the promised gain are the same.
 TEST(KernelScale, KeepsOnlyABlurAboveItsSpread) {
-    const int width = 128, height = 128, n = width * height * 3;
+    const int width = 256, height = 256, n = width * height * 3;  // blocks of 16 × 16 pixels
     const double fixed = 4294967296.0, k = KernelScaleProbe::kShare;
     auto at = [&](double v) { return int64_t(std::llround(v / 2 / k * fixed)); };  // a half of the share, as splatted
     const std::vector<float> light(n, 1.f);
@@ -253,7 +253,7 @@ TEST(KernelScale, KeepsOnlyABlurAboveItsSpread) {
         for (int i = y * width * 3; i < (y * width + 16) * 3; ++i) a1[size_t(i)] = at(1.0 + delta);
     const KernelScaleProbe block = probeKernelScale(a1.data(), a1.data(), flat.data(), flat.data(), light, width, fixed);
     EXPECT_NEAR(block.biasChange / spread.biasChange, 1.0, 1e-3);
-    EXPECT_NEAR(spread.biasChange / spread.biasChangeSpread, std::sqrt(double(width / 16 * height / 16)), 1e-3);
+    EXPECT_NEAR(spread.biasChange / spread.biasChangeSpread, double(KernelScaleProbe::kBlocks), 1e-3);
     EXPECT_NEAR(block.biasChange / block.biasChangeSpread, 1.0, 1e-3);
     KernelScaleProbe noisy = spread, lumpy = block;
     noisy.noise = lumpy.noise = spread.biasChange;  // a noise that makes smaller kernels pay

@@ -19,8 +19,9 @@ float passRadiusScale(int p, float alpha) {
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
                                   const std::vector<float>& light, int width, double fixedScale) {
     KernelScaleProbe p;
-    const int block = KernelScaleProbe::kBlock, blocksX = (width + block - 1) / block;
-    std::vector<double> blockChange;  // S's terms summed a block
+    const size_t pixels = light.size() / 3, height = pixels / size_t(width);
+    const int blocksX = KernelScaleProbe::kBlocks, blocksY = KernelScaleProbe::kBlocks;
+    std::vector<double> blockChange(size_t(blocksX) * blocksY, 0.0);  // S's terms summed a block
     for (size_t i = 0; i < light.size(); ++i) {
         const double w = 1.0 / (double(light[i]) * light[i] + 0.01);
         const double k = KernelScaleProbe::kShare / fixedScale;  // the flux × kShare
@@ -30,9 +31,8 @@ KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int6
         const double change = A + B - C - D, noise = A - C - (B - D), term = w * (change * change - noise * noise);
         p.biasChange += term;
         const size_t pixel = i / 3, x = pixel % size_t(width), y = pixel / size_t(width);
-        const size_t at = (y / block) * blocksX + x / block;
-        if (at >= blockChange.size()) blockChange.resize(at + 1, 0.0);
-        blockChange[at] += term;
+        const size_t row = std::min(size_t(blocksY - 1), y * blocksY / std::max<size_t>(height, 1));
+        blockChange[row * blocksX + x * blocksX / size_t(width)] += term;
     }
     for (double t : blockChange) p.biasChangeSpread += t * t;
     p.biasChangeSpread = std::sqrt(p.biasChangeSpread);
