@@ -77,7 +77,7 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
 }
 
 float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
-    if (!(probe.biasChange > 0.0) || !(probe.biasChange > kBiasSignificance * probe.biasChangeSpread)) return 1.f;
+    if (!(probe.biasChange > kBiasSignificance * probe.biasChangeSpread)) return 1.f;  // none, or none above its spread
     // 2^(−k/20), k = −kLargerSteps … 40: ¼ to kMaxKernelScale in steps of 3.5 %. Larger kernels
     // only where a blur was measured and extrapolates small: where none shows in the share's
     // noise (direct_light, one seed in two) it may still be there, and 1.46 gave 1.34 times the
