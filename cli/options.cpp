@@ -242,8 +242,14 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
 
 // The photons and their kernels.
 void addPhotonOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d) {
-    cmd.add({"--photons", "M", "photon rays stored per pass (default " + std::to_string(d.splat.photons) + "; also 1e6, 2M, 500k)",
+    cmd.add({"--photons", "M", "photon rays stored per pass, or per photon round (default " + std::to_string(d.splat.photons) + "; also 1e6, 2M, 500k)",
              [&](const std::string& v) { cfg.photons = parseCount<int64_t>("--photons", v); }});
+    cmd.add({"--photon-rounds", "N",
+             "photon rounds a pass, each --photons more photons splatted on the pass's eye samples: auto (default: 1, but "
+             "with --time-limit the first pass weighs the noise and time of its photons against those of its eye pass and "
+             "direct film, and chooses the rounds of the others, reported as photon_rounds) or a number in 1.." +
+                 std::to_string(RenderConfig::kMaxPhotonRounds),
+             [&](const std::string& v) { cfg.photonRounds = v == "auto" ? 0 : parseNumber<int>("--photon-rounds", v); }});
     cmd.add({"--split", "D,I,C", "shares of direct, indirect and caustic photons (default " + tripleText(d.splat.photonSplit()) +
                                      "; with --direct photons " + tripleText(d.paper.photonSplit()) + ")",
              [&](const std::string& v) {

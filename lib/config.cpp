@@ -93,6 +93,7 @@ void RenderConfig::validate() const {
     requireRange("coverage-probes", coverageProbes, 0, CoverageSettings::kMaxProbes);
     requireRange("min-coverage", minCoverage, 0, 1);
     requireRange("receiver-spacing", receiverSpacing, 0, 4);
+    requireRange("photon-rounds", photonRounds, 0, kMaxPhotonRounds);
     requireRange("passes", passes, 0, 1 << 20);
     requireRange("alpha", alpha, 0.01, 1);
     if (kernelScale != 0.f) requireRange("kernel-scale", kernelScale, 0.05, 4);
@@ -121,6 +122,8 @@ void RenderConfig::validate() const {
                                            ": a render of " + std::to_string(passes) + " passes has no pass " +
                                            std::to_string(replayPass));
     if (replays()) requireRange("photon", double(replayIndex), 0, 1e12);
+    if (replays() && photonRounds > 1)
+        throw Error(ErrorKind::Config, "`photon` replays a ray of a pass of one photon round: not with `photon-rounds` above 1");
     if (blenderLayer.find_first_of(".\n") != std::string::npos)
         throw Error(ErrorKind::Config, "`blender-layer` '" + blenderLayer + "' names a view layer: no '.' in it");
     validateGrid();
@@ -243,6 +246,7 @@ ImageAttributes RenderConfig::attributes() const {
         a["alpha"] = std::to_string(alpha);
         a["kernelScale"] = kernelScale > 0.f ? std::to_string(kernelScale) : probesKernelScale() ? "auto" : "1";
         a["photons"] = std::to_string(photons);
+        a["photonRounds"] = photonRounds > 0 ? std::to_string(photonRounds) : photonRoundsAuto() ? "auto" : "1";
         a["split"] = tripleText(used);
         a["kernelPhotons"] = tripleText(kernelPhotons);
         a["radiusVoxels"] = tripleText(minRadius) + "/" + tripleText(maxRadius);

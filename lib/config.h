@@ -121,6 +121,11 @@ struct RenderConfig {
     int directSpp = 16;
     // Defaults and the measurements behind them: PhotonSettings.
     int64_t photons = PhotonSettings{}.photons;
+    // Photon rounds a pass (docs/design.md §9): each traces `photons` more paths and splats them
+    // on the pass's eye samples. 0: auto, 1 but under a time limit what the first pass measures
+    // (photonRoundsAuto()).
+    int photonRounds = 0;
+    static constexpr int kMaxPhotonRounds = 64;
     // The split as given; photonSplit() is what the render uses: unless set, direct light by
     // sampling traces no direct photons (the paper's 0.5 : 0.3 for the others).
     ClassTriple split = PhotonSettings{}.split;
@@ -164,6 +169,11 @@ struct RenderConfig {
     // Whether the render needs the voxel grid's occlusion (the mask), not only its geometry.
     bool probesKernelScale() const {
         return method == Method::Splat && directBySampling() && kernelScale == 0.f && (timeLimit > 0.0 || renderPassCount() > 1);
+    }
+    // Whether the first pass chooses the photon rounds of the others: under a time limit, where
+    // it probes the kernel scale (its noise is what the rounds lower) and has a direct film.
+    bool photonRoundsAuto() const {
+        return photonRounds == 0 && timeLimit > 0.0 && probesKernelScale() && directSpp > 0;
     }
     float kernelScaleOrOne() const { return kernelScale > 0.f ? kernelScale : 1.f; }
     bool needsMask() const { return method == Method::Splat && visibilityUsed() == Visibility::Mask; }

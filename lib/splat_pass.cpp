@@ -108,6 +108,11 @@ PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
     return out;
 }
 
+// The first path of a pass's photon round: pass p's from p · 2^40, its round r's 2^32 further per r.
+uint64_t firstPathOf(int pass, int round) {
+    return (uint64_t(pass) << PhotonSettings::kPathsPerPassBits) + (uint64_t(round) << PhotonSettings::kPathsPerRoundBits);
+}
+
 // The scale at which the first pass keeps its probed share's light, for the scale m chosen.
 float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
 
@@ -155,9 +160,14 @@ public:
             for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
             c_.ranks.sumAtRoot(light);
         }
-        double scale = c_.ranks.rank() == 0 ? choose(parts, seconds, gather, whole, other) : 1.0;
-        c_.ranks.broadcast(&scale, 1);
-        const float m = float(scale);
+        double chosen[2] = {1.0, 1.0};  // the scale, the photon rounds
+        if (c_.ranks.rank() == 0) {
+            chosen[0] = choose(parts, seconds, gather, whole, other);
+            chosen[1] = rounds_;
+        }
+        c_.ranks.broadcast(chosen, 2);
+        const float m = float(chosen[0]);
+        rounds_ = int(chosen[1]);
         for (int j = 0; j < 4; ++j) {  // the halves are done with: freed before the rest is splatted
             parts[j] = FixedFilm();
             slots[j] = std::vector<int64_t>();
@@ -176,6 +186,14 @@ public:
     // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
     // and half its splat at the scale chosen).
     double nextSeconds() const { return nextSeconds_; }
+    // The photon rounds of the later passes, where the first chooses them (else 1).
+    int rounds() const { return rounds_; }
+    // To choose them: the first pass's eye pass and trees, and its photons' seconds before the
+    // indirect ones' splat (tracing, the other classes' splat).
+    void timeRounds(double eyeAndTrees, double photonsBefore) {
+        eyeAndTrees_ = eyeAndTrees;
+        photonsBefore_ = photonsBefore;
+    }
 
     // Ray `index` of the first pass's photons (path order, before coverage) as that pass
     // splatted it under the probe, the scale m chosen: in its part (the other classes, the
@@ -232,6 +250,7 @@ private:
         }
         const float scale = chooseKernelScale(probe, plan);
         if (plan.timed) nextSeconds_ = plan.passOther + kWorthStarting * splatSeconds(plan, scale);
+        if (c_.cfg.photonRoundsAuto() && !eye_.filmNoise.empty()) chooseRounds(probe, plan, scale, light);
         const double least = expectedKernelError(probe, plan, scale);
         c_.stats.setCount("kernel_probe_gain", least > 0.0 ? expectedKernelError(probe, plan, 1.f) / least : 1.0);
         c_.stats.setCount("kernel_probe_noise", probe.noise);
@@ -241,6 +260,23 @@ private:
         return scale;
     }
 
+    // At rank 0: the later passes' photon rounds (kernel_scale.h), from the photons' noise at
+    // the scale chosen against the direct film's, weighted alike.
+    void chooseRounds(const KernelScaleProbe& probe, const KernelScalePlan& plan, float scale, const std::vector<float>& light) {
+        PhotonRoundsPlan rp;
+        for (size_t i = 0; i < values_; ++i)
+            rp.filmNoise += double(eye_.filmNoise[i / 3][int(i % 3)]) / (double(light[i]) * light[i] + 0.01);
+        rp.photonNoise = noiseAtScale(probe, scale);
+        rp.eyeSeconds = eyeAndTrees_;
+        rp.roundSeconds = photonsBefore_ + splatSeconds(plan, scale);
+        rp.secondsLeft = plan.secondsLeft;
+        rounds_ = choosePhotonRounds(rp);
+        c_.stats.setCount("photon_rounds_film_noise", rp.filmNoise);
+        c_.stats.setCount("photon_rounds_photon_noise", rp.photonNoise);
+        c_.stats.setCount("photon_rounds_eye_seconds", rp.eyeSeconds);
+        c_.stats.setCount("photon_rounds_round_seconds", rp.roundSeconds);
+    }
+
     const RenderContext& c_;
     const PassTargets& targets_;
     const EyePass& eye_;
@@ -248,6 +284,8 @@ private:
     SplatTotals& totals_;
     const size_t values_;
     double nextSeconds_ = 0.0;
+    int rounds_ = 1;
+    double eyeAndTrees_ = 0.0, photonsBefore_ = 0.0;
 };
 
 }  // namespace
@@ -285,6 +323,7 @@ EyePass SplatPasses::traceEye(int pass) {
     Timer t;
     eye_.firstSample = pass * eye_.spp;
     eye_.firstDirectSample = pass * eye_.directSpp;
+    eye_.measureFilmNoise = pass == 0 && probing_ && c_.cfg.photonRoundsAuto();
     EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
     eyeSeconds_ = t.seconds();
     c_.stats.addTime("eye", eyeSeconds_);
@@ -315,12 +354,13 @@ float SplatPasses::receiverSpacing(int pass) const {
 
 // New photons (a fresh range of paths) with the pass's shrunk kernels; the probe's pass traces
 // its indirect kernels at scale 1 and scales its parts itself.
-PhotonMap SplatPasses::tracePhotonsOf(int pass, PhotonSettings& passSettings) {
+PhotonMap SplatPasses::tracePhotonsOf(int pass, int round, PhotonSettings& passSettings) {
     Timer t;
-    photons_.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
+    photons_.firstPath = firstPathOf(pass, round);
     photons_.radiusScale = passRadiusScale(pass, c_.cfg.alpha);
+    photons_.rounds = roundsOf(pass);
     passSettings = photons_;
-    if (probing_ && pass == 0) passSettings.classScale[kPhotonIndirect] = 1.f;
+    if (probing_ && pass == 0 && round == 0) passSettings.classScale[kPhotonIndirect] = 1.f;
     PhotonMap photons = tracePhotons(c_.scene, c_.accel, c_.lights, passSettings, c_.pool, c_.reporter);
     c_.stats.addTime("photons", t.seconds());
     photons.report(c_.stats);
@@ -333,10 +373,11 @@ PhotonMap SplatPasses::tracePhotonsOf(int pass, PhotonSettings& passSettings) {
 // The pass's photons from the store, traced (with every kernel's coverage) when it has none yet.
 // The coverage of a kernel is a function of the ray alone (seed, pass, ray), so measuring it
 // for every photon here gives each frame the light the splat's own measurement would.
-PhotonMap SplatPasses::storedPhotonsOf(int pass, PhotonSettings& passSettings) {
-    auto it = store_->passes.find(pass);
+PhotonMap SplatPasses::storedPhotonsOf(int pass, int round, PhotonSettings& passSettings) {
+    const int key = pass * RenderConfig::kMaxPhotonRounds + round;
+    auto it = store_->passes.find(key);
     if (it == store_->passes.end()) {
-        PhotonMap photons = tracePhotonsOf(pass, passSettings);
+        PhotonMap photons = tracePhotonsOf(pass, round, passSettings);
         if (measuresCoverage_) {
             Timer t;
             coverage_.pass = uint64_t(pass);
@@ -344,10 +385,11 @@ PhotonMap SplatPasses::storedPhotonsOf(int pass, PhotonSettings& passSettings) {
             c_.stats.addTime("coverage", t.seconds());
         }
         ++store_->traced;
-        it = store_->passes.emplace(pass, std::move(photons)).first;
+        it = store_->passes.emplace(key, std::move(photons)).first;
     } else {  // the settings tracePhotonsOf gave them
-        photons_.firstPath = uint64_t(pass) << PhotonSettings::kPathsPerPassBits;
+        photons_.firstPath = firstPathOf(pass, round);
         photons_.radiusScale = passRadiusScale(pass, c_.cfg.alpha);
+        photons_.rounds = roundsOf(pass);
         passSettings = photons_;
     }
     c_.stats.setCount("photon_store_mb", store_->bytes() / kMB);
@@ -367,25 +409,50 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
     ts.report(c_.stats);
     if (pass == 0 && ts.samplesOutside > 0)
         c_.reporter.warn(c_.scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
-    PhotonSettings passSettings;
-    PhotonMap photons = store_ ? storedPhotonsOf(pass, passSettings) : tracePhotonsOf(pass, passSettings);
-    if (replaying_) replayRay(photons, passSettings);
-    else if (share.share == 0) sum.add(eye.film);  // the eye pass's own light: emission, albedo, normal, direct
-    const double before = t.seconds();
-    return before + splatPass(pass, share, targets, eye, std::move(photons), passSettings, sum, deadline);
+    if (pass == 0) eyeAndTrees_ = t.seconds(), photonsBegan_ = whole_.seconds();
+    if (!replaying_ && share.share == 0) sum.add(eye.film);  // the eye pass's own light: emission, albedo, normal, direct
+    // Its photon rounds, each new paths splatted on the same eye samples, until the deadline.
+    const std::function<bool()> timeUp = timeUpFor(share, deadline);
+    // Their indirect photons' receivers are gathered once, after the last.
+    const int rounds = roundsOf(pass);
+    std::vector<int64_t> sums;
+    double needs = 0.0;
+    for (int round = 0; round < rounds; ++round) {
+        PhotonSettings passSettings;
+        PhotonMap photons = store_ ? storedPhotonsOf(pass, round, passSettings) : tracePhotonsOf(pass, round, passSettings);
+        if (replaying_) replayRay(photons, passSettings);
+        const double before = t.seconds();
+        const double splat = splatPass(pass, round, share, targets, eye, std::move(photons), passSettings, sum, timeUp,
+                                       rounds > 1 ? &sums : nullptr);
+        if (round == 0) needs = before + splat;
+        if (round + 1 < rounds && timeUp && timeUp()) break;
+    }
+    c_.stats.setCount("photon_rounds", rounds);
+    if (rounds > 1) {
+        Timer gathering;
+        targets.gather({&sums}, {&sum}, splat_);
+        c_.stats.addTime("splat", gathering.seconds());
+    }
+    return needs;
+}
+
+int SplatPasses::roundsOf(int pass) const {
+    if (replaying_) return 1;
+    if (c_.cfg.photonRounds > 0) return c_.cfg.photonRounds;
+    return pass == 0 ? 1 : rounds_;
 }
 
 // The photons' light (this rank's share of them) into `sum`, until the deadline; the probe's pass
 // splats its indirect photons apart, at the scales it measures. Returns half the seconds a
 // whole splat takes.
-double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
-                              const PhotonSettings& passSettings, FixedFilm& sum, const Deadline& deadline) {
+double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
+                              const PhotonSettings& passSettings, FixedFilm& sum, const std::function<bool()>& timeUp,
+                              std::vector<int64_t>* sums) {
     Timer t;
     coverage_.pass = uint64_t(pass);
     splat_.share = share.share;
     splat_.shares = share.shares;
-    const std::function<bool()> timeUp = timeUpFor(share, deadline);
-    const bool probe = probing_ && pass == 0 && !replaying_;
+    const bool probe = probing_ && pass == 0 && round == 0 && !replaying_;
     PhotonMap indirect;
     if (probe) {
         auto begin = std::stable_partition(photons.rays.begin(), photons.rays.end(),
@@ -393,12 +460,14 @@ double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& tar
         indirect.rays.assign(begin, photons.rays.end());
         photons.rays.erase(begin, photons.rays.end());
     }
-    const uint64_t coveredOthers = targets.splat(photons, splat_, sum, &totals_.splat, &totals_.coverage, timeUp);
+    const uint64_t coveredOthers = targets.splat(photons, splat_, sum, &totals_.splat, &totals_.coverage, timeUp, sums);
     uint64_t coveredIndirect = coveredOthers;
     if (probe) {
         KernelScaleProbeStep step(c_, targets, eye, splat_, totals_);
+        step.timeRounds(eyeAndTrees_, whole_.seconds() - photonsBegan_);
         const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), timeUp, coveredIndirect);
         nextPass_ = step.nextSeconds();
+        rounds_ = step.rounds();
         photons_.classScale[kPhotonIndirect] = m;
         char line[160];
         std::snprintf(line, sizeof line, "indirect kernels at scale %.3g, from the bias and noise the first pass measured", m);
@@ -406,6 +475,8 @@ double SplatPasses::splatPass(int pass, const PassShare& share, PassTargets& tar
     }
     double shares[3];
     classShares(photons, coveredOthers, coveredIndirect, shares);
+    // The direct film counts once a pass; direct photons (--direct photons) once a round.
+    if (round > 0 && photons.pathsFor[kPhotonDirect] <= 0) shares[kPhotonDirect] = 0.0;
     if (!replaying_ && share.share == 0) sum.countPhotonPass(shares);  // a shared pass counts once
     const double seconds = t.seconds();
     c_.stats.addTime("splat", seconds);

@@ -26,10 +26,10 @@ class PassTargets;
 // that renders that pass. They depend on the scene and the settings, not on the camera, so a
 // frame's image is the same whether its photons were traced for it or for a frame before it.
 struct PhotonStore {
-    std::map<int, PhotonMap> passes;  // by pass
+    std::map<int, PhotonMap> passes;  // by round: pass × RenderConfig::kMaxPhotonRounds + round
     // The occlusion grid (or its empty twin) the first frame built: it depends on the scene alone.
     std::shared_ptr<const OcclusionGrid> grid;
-    int64_t traced = 0;               // passes traced (the rest of the frames' passes reused them)
+    int64_t traced = 0;               // rounds traced (the rest of the frames' rounds reused them)
     double bytes() const {
         double b = 0.0;
         for (const auto& [pass, photons] : passes) b += double(photons.bytes());
@@ -75,10 +75,14 @@ public:
 private:
     EyePass traceEye(int pass);
     float receiverSpacing(int pass) const;
-    PhotonMap tracePhotonsOf(int pass, PhotonSettings& passSettings);
-    PhotonMap storedPhotonsOf(int pass, PhotonSettings& passSettings);
-    double splatPass(int pass, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
-                     const PhotonSettings& passSettings, FixedFilm& sum, const Deadline& deadline);
+    PhotonMap tracePhotonsOf(int pass, int round, PhotonSettings& passSettings);
+    PhotonMap storedPhotonsOf(int pass, int round, PhotonSettings& passSettings);
+    // The photon rounds of pass `pass` (docs/design.md §9).
+    int roundsOf(int pass) const;
+    // `sums`: where the indirect photons' receivers' sums wait for the pass's gather (rounds).
+    double splatPass(int pass, int round, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
+                     const PhotonSettings& passSettings, FixedFilm& sum, const std::function<bool()>& timeUp,
+                     std::vector<int64_t>* sums);
     std::function<bool()> timeUpFor(const PassShare& share, const Deadline& deadline) const;
     void replayRay(PhotonMap& photons, const PhotonSettings& passSettings);
     void report();
@@ -95,6 +99,8 @@ private:
     bool replaying_ = false;
     int traced_ = 0;  // passes whose photons this render traced (stats: photon_passes_traced)
     double nextPass_ = 0.0;  // the probe's estimate of a later pass's seconds
+    int rounds_ = 1;         // the photon rounds of the passes after the first, where it chooses them
+    double eyeAndTrees_ = 0.0, photonsBegan_ = 0.0;  // the first pass's: seconds, and whole_'s at its photons
     double eyeSeconds_ = 0.0;
     Timer whole_;
 };

@@ -234,6 +234,8 @@ def main():
         ("splat: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--passes", "3")),
         ("splat: 1 pass shared by 3 ranks (the paper's estimator)", same_image(3, cli.GLOSSY, "--direct", "photons", "--passes", "1")),
         ("splat: 2 passes and 3 film passes round 2 ranks", same_image(2, cli.CORNELL, "--passes", "2", "--film-passes", "3")),
+        ("splat: 1 pass of 2 photon rounds shared by 2 ranks", same_image(2, cli.CORNELL, "--passes", "1", "--photon-rounds", "2")),
+        ("splat: 3 passes of 2 photon rounds round 2 ranks", same_image(2, cli.CORNELL, "--passes", "3", "--photon-rounds", "2")),
         ("path: 3 passes round 2 ranks", same_image(2, cli.GLOSSY, "--method", "path", "--passes", "3")),
         ("path: 1 pass's rows shared by 3 ranks", same_image(3, cli.GLOSSY, "--method", "path")),
         ("time limit: ranks agree on the passes", test_time_limit_ranks_agree_on_the_passes),

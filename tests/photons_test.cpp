@@ -281,3 +281,26 @@ TEST(KernelScale, KeepsScaleOneWithoutAClearGain) {
     EXPECT_LT(expectedKernelError(p, plan, 1.f), kMinKernelGain * expectedKernelError(p, plan, 1.1f));
     EXPECT_EQ(chooseKernelScale(p, plan), 1.f);
 }
+
+// Photon rounds (kernel_scale.h): R = √(kRoundsNoiseRatio · (V/F) · (E/W)), rounded, within
+// [1, kMaxAutoPhotonRounds] and what leaves two passes in the time left; 1 with nothing measured.
+TEST(PhotonRounds, ChoiceBalancesTheNoiseAndTimeOfPhotonsAndFilm) {
+    PhotonRoundsPlan plan;
+    plan.photonNoise = 1.0, plan.filmNoise = kRoundsNoiseRatio;  // (V/F)·ratio = 1
+    plan.eyeSeconds = 4.0, plan.roundSeconds = 1.0, plan.secondsLeft = 100.0;
+    EXPECT_EQ(choosePhotonRounds(plan), 2);
+    plan.eyeSeconds = 9.0;
+    EXPECT_EQ(choosePhotonRounds(plan), 3);
+    plan.photonNoise = 4.0;  // noisier photons: twice the rounds
+    EXPECT_EQ(choosePhotonRounds(plan), 6);
+    plan.secondsLeft = 2.0 * (9.0 + 4.0);  // two passes of 9 s and four rounds
+    EXPECT_EQ(choosePhotonRounds(plan), 4);
+    plan.secondsLeft = 10.0;
+    EXPECT_EQ(choosePhotonRounds(plan), 1) << "not even two passes of one round";
+    plan.secondsLeft = 1e6, plan.photonNoise = 1e6;
+    EXPECT_EQ(choosePhotonRounds(plan), kMaxAutoPhotonRounds);
+    plan.filmNoise = 0.0;
+    EXPECT_EQ(choosePhotonRounds(plan), 1) << "nothing measured";
+    plan.filmNoise = 1.0, plan.photonNoise = 1e-9;
+    EXPECT_EQ(choosePhotonRounds(plan), 1) << "never fewer than one";
+}

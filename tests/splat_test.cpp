@@ -500,6 +500,57 @@ TEST(FilmPasses, AddTheDirectFilmOfWholePassesAndNoPhotons) {
     EXPECT_NE(film.film.layers[kDirect], two.film.layers[kDirect]);
 }
 
+// Photon rounds (--photon-rounds, docs/design.md §9): R rounds of M photons on one eye pass are
+// a pass of R·M photons, whose kernels they take. Over two seeds, the indirect kernels of one
+// size whatever the photons: the eye pass's layers are one round's to the bit; the indirect
+// light has the mean of a pass of R·M photons and about its noise (the seeds' squared
+// difference), less than one round's (measured 0.77: the photons' part halves, the eye samples'
+// stays); the same to the bit whatever the thread count.
+TEST(PhotonRounds, AreAPassOfTheirPhotonsTogether) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    const Scene scene = loadScene(std::string(data) + "/interior.gltf", silentReporter());
+    RenderConfig cfg = splatConfig(48);
+    cfg.height = 0;
+    cfg.kernelScale = 1.f;
+    cfg.minRadius[kPhotonIndirect] = cfg.maxRadius[kPhotonIndirect] = 8.f;
+    auto seeds = [&](int64_t photons, int rounds) {
+        cfg.photons = photons;
+        cfg.photonRounds = rounds;
+        std::vector<RenderResult> r;
+        for (uint64_t seed : {1, 2}) {
+            cfg.seed = seed;
+            r.push_back(render(scene, cfg, silentReporter()));
+        }
+        return r;
+    };
+    auto noise = [](const std::vector<RenderResult>& r) {
+        double e = 0.0;
+        for (size_t p = 0; p < r[0].film.pixelCount(); ++p) {
+            const Vec3 d = r[0].film.layers[kIndirect][p] - r[1].film.layers[kIndirect][p];
+            e += glm::dot(d, d);
+        }
+        return e;
+    };
+    auto mean = [](const std::vector<RenderResult>& r) { return layerMean(r[0].film, kIndirect) + layerMean(r[1].film, kIndirect); };
+    const std::vector<RenderResult> one = seeds(20000, 1), two = seeds(20000, 2), together = seeds(40000, 1);
+    EXPECT_EQ(two[0].stats.count("photons_stored"), 2.0 * one[0].stats.count("photons_stored"));
+    EXPECT_EQ(two[0].stats.count("photon_passes"), 2.0) << "each round counts";
+    for (int l : {kDirect, kEmission}) EXPECT_EQ(two[0].film.layers[l], one[0].film.layers[l]) << layerName(l);
+    const double meanRatio = mean(two) / mean(together), ofOne = noise(two) / noise(one), ofTogether = noise(two) / noise(together);
+    RecordProperty("indirect_mean_ratio", std::to_string(meanRatio));
+    RecordProperty("noise_of_one_round", std::to_string(ofOne));
+    RecordProperty("noise_of_one_pass", std::to_string(ofTogether));
+    EXPECT_NEAR(meanRatio, 1.0, 0.03);
+    EXPECT_GT(ofOne, 0.3);
+    EXPECT_LT(ofOne, 0.85) << "a round's photons the same as the first's would give 1";
+    EXPECT_GT(ofTogether, 0.7);
+    EXPECT_LT(ofTogether, 1.4);
+    cfg.photonRounds = 2;
+    cfg.photons = 20000;
+    expectSamePixelsWhateverTheThreadCount(scene, cfg);
+}
+
 // A walkthrough's photon store (docs/design.md §12): photons traced for one camera and splatted
 // into another's frame give that frame bit for bit the image its own render gives, with the
 // coverage measured for every photon where the splat measures it only for those it needs; the

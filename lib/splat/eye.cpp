@@ -103,9 +103,13 @@ public:
     // The direct film (docs/design.md §4): D camera samples of its own sequence, each with
     // emission, albedo, normal and direct light, the light samples of all the pixel's film
     // samples stratified as one sequence.
-    void directFilm(int x, int y) const {
+    void directFilm(int x, int y, std::vector<Vec3>* noise) const {
         if (!withFilm_) return;
         const uint32_t pixel = pixelOf(x, y);
+        // The light of the first and of the second half of the samples: each half of the pass's
+        // block of the sequence is stratified by itself (even and odd ones are not: the even
+        // ones of a Sobol sequence lie in the left half of the pixel).
+        Vec3 halves[2] = {Vec3(0.f), Vec3(0.f)};
         const float invFilm = 1.f / float(st_.directSpp);
         const uint64_t scramble = hashKey(st_.seed, Stage::DirectFilm, pixel);
         const uint64_t lightScramble = hashKey(st_.seed, Stage::DirectFilm, pixel, 1);
@@ -113,6 +117,7 @@ public:
             const uint32_t index = uint32_t(st_.firstDirectSample + s);
             const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
             Sampler sampler(st_.seed, Stage::DirectFilm, key);
+            const Vec3 before = filmLight(pixel);
             const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
             followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
                             Vec3(invFilm), pixelCone_, st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
@@ -123,11 +128,17 @@ public:
                 addDirect(pixel, weight, estimateDirectAcrossSamples(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
                                                                      lightScramble, index, ds));
             });
+            halves[2 * s >= st_.directSpp] += filmLight(pixel) - before;
+        }
+        if (noise && st_.directSpp >= 2) {
+            const Vec3 d = halves[0] - halves[1];  // each half's mean is 2 × its sum
+            (*noise)[pixel] = d * d;               // (2·Σfirst − 2·Σsecond)² / 4
         }
     }
 
 private:
     uint32_t pixelOf(int x, int y) const { return uint32_t(y * st_.width + x); }
+    Vec3 filmLight(uint32_t pixel) const { return film_.layers[kEmission][pixel] + film_.layers[kDirect][pixel]; }
     void addFeatures(uint32_t pixel, float weight, const Bsdf& bsdf) const {
         film_.albedo[pixel] += weight * bsdf.albedo();
         film_.normal[pixel] += weight * bsdf.shadingNormal();
@@ -153,6 +164,8 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
     EyePass out;
     out.film = Film(st.width, st.height);
     const EyePassTracer tracer(scene, accel, lights, camera, st, out.film);
+    if (st.measureFilmNoise) out.filmNoise.assign(out.film.pixelCount(), Vec3(0.f));
+    std::vector<Vec3>* noise = st.measureFilmNoise ? &out.filmNoise : nullptr;
     std::vector<EyeSamples> rows(st.height);
     reporter.begin("eye pass", st.height, "rows");
     pool.parallelFor(st.height, 4, [&](int64_t y0, int64_t y1, int) {
@@ -161,7 +174,7 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
             row.reserve(size_t(st.width) * st.spp);
             for (int x = 0; x < st.width; ++x) {
                 tracer.receivers(x, int(y), row);
-                tracer.directFilm(x, int(y));
+                tracer.directFilm(x, int(y), noise);
             }
             reporter.advance(1);
         }

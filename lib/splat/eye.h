@@ -35,6 +35,7 @@ struct EyePassSettings {
     int directSpp = 0;
     int firstDirectSample = 0;
     uint64_t seed = 0;
+    bool measureFilmNoise = false;  // EyePass::filmNoise, where there is a direct film of D ≥ 2
 };
 
 struct EyePass {
@@ -43,6 +44,9 @@ struct EyePass {
     // directSamples the direct layer (light sampling at each of the film's samples, or at each
     // eye sample, weighted by it).
     Film film;
+    // With measureFilmNoise: per pixel, the variance of the direct film's light (emission and
+    // direct), estimated as (mean of its first half of samples − mean of its second)² / 4.
+    std::vector<Vec3> filmNoise;
 };
 
 // `lights` is needed only with settings.directSamples > 0.

@@ -50,6 +50,16 @@ double noiseExponent(const KernelScaleProbe& p) {
 
 }  // namespace
 
+double noiseAtScale(const KernelScaleProbe& probe, float m) { return probe.noise * std::pow(double(m), -noiseExponent(probe)); }
+
+int choosePhotonRounds(const PhotonRoundsPlan& plan) {
+    if (!(plan.photonNoise > 0.0) || !(plan.filmNoise > 0.0) || !(plan.eyeSeconds > 0.0) || !(plan.roundSeconds > 0.0))
+        return 1;
+    const double best = std::sqrt(kRoundsNoiseRatio * plan.photonNoise / plan.filmNoise * plan.eyeSeconds / plan.roundSeconds);
+    const double fit = std::floor((plan.secondsLeft / 2.0 - plan.eyeSeconds) / plan.roundSeconds);
+    return int(std::clamp(std::min(std::round(best), fit), 1.0, double(kMaxAutoPhotonRounds)));
+}
+
 double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan& plan, float m) {
     double passes = plan.passes;
     if (plan.timed) {

@@ -194,7 +194,9 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
     // Each pass its own scrambling of the sequence, indexed by the path within the pass: the
     // radical inverse runs over an index's own digits (about 17 in base 2 for a pass's paths, 41
     // for pass · 2^40 + path), and under a point light it is a tenth of the render's profile.
-    ScrambledHalton qmc(hashKey(st.seed, Stage::Photon, st.firstPath >> PhotonSettings::kPathsPerPassBits, 0x9a55),
+    // A pass's photon rounds after its first (bits 32–39 of firstPath) scramble it anew.
+    const uint64_t round = (st.firstPath >> PhotonSettings::kPathsPerRoundBits) & 0xff;
+    ScrambledHalton qmc(hashKey(st.seed, Stage::Photon, st.firstPath >> PhotonSettings::kPathsPerPassBits, 0x9a55 ^ (round << 20)),
                         5 + kDimsPerBounce * st.maxDepth);
 
     // Quotas.
@@ -255,7 +257,7 @@ PhotonMap tracePhotons(const Scene& scene, const RayAccel& accel, const LightSam
     for (PhotonRay& r : map.rays) {
         double n = double(map.pathsFor[r.cls]);
         r.flux = Vec3(DVec3(r.flux) / n);
-        float h = std::sqrt(st.k[r.cls] / (kPi * float(n) * std::max(r.density, 1e-30f)));
+        float h = std::sqrt(st.k[r.cls] / (kPi * float(n * st.rounds) * std::max(r.density, 1e-30f)));
         r.radius = std::clamp(h, st.minRadius[r.cls] * st.voxelSize, st.maxRadius[r.cls] * st.voxelSize) * st.radiusScale *
                    st.classScale[r.cls];
         if (st.reachToBounds) reachBounds(scene, r);

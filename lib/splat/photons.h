@@ -78,7 +78,9 @@ struct PhotonSettings {
     uint64_t seed = 0;
     uint64_t firstPath = 0;                  // sequence offset (progressive passes)
     static constexpr int kPathsPerPassBits = 40;  // pass p traces paths from p · 2^40: ranges never overlap
+    static constexpr int kPathsPerRoundBits = 32;  // and its round r (after the first) from there + r · 2^32
     float radiusScale = 1.f;                 // this pass's kernel shrinkage, applied after the clamps
+    int rounds = 1;                          // the pass's photon rounds: kernels hold k photons of them all
     ClassTriple classScale = {1.f, 1.f, 1.f}; // and per class (the indirect kernels' scale, kernel_scale.h)
     // The kernel reaches on past x(i) to the scene's bounds (the splat and the coverage stop
     // kReceiverWindow radii past it): with visibility by rays alone (--visibility rays) a

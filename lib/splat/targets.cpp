@@ -19,8 +19,10 @@ PassTargets::PassTargets(const RayAccel& accel, const OcclusionGrid& grid, EyeSa
 }
 
 uint64_t PassTargets::splat(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, SplatStats* stats,
-                            CoverageStats* coverage, const std::function<bool()>& timeUp) const {
-    std::vector<int64_t> slots(sparse_ ? receivers_.slots() * 3 : 0);  // the receivers' irradiance, slot × RGB
+                            CoverageStats* coverage, const std::function<bool()>& timeUp, std::vector<int64_t>* sums) const {
+    std::vector<int64_t> own;
+    std::vector<int64_t>& slots = sums ? *sums : own;  // the receivers' irradiance, slot × RGB
+    slots.resize(sparse_ ? receivers_.slots() * 3 : 0, 0);
     const size_t n = photons.rays.size();
     uint64_t covered = UINT64_MAX;
     for (size_t begin = 0; begin < n;) {
@@ -33,7 +35,7 @@ uint64_t PassTargets::splat(const PhotonMap& photons, const SplatSettings& setti
             break;
         }
     }
-    gather({&slots}, {&part}, settings);
+    if (!sums) gather({&slots}, {&part}, settings);
     return covered;
 }
 

@@ -33,8 +33,11 @@ public:
     // photon layers. With `timeUp`, in portions of whole paths (a sixteenth of the photons, at
     // least 4096), until it says the time is up (after a portion, so at least one). Returns the
     // paths whose photons were all splatted, [0, P) of the pass: UINT64_MAX for all of them.
+    // With `sums`, the indirect photons' receivers' sums are added there and not gathered: a
+    // pass's photon rounds are gathered once (gather()), which is the sum of their gathers.
     uint64_t splat(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, SplatStats* stats,
-                   CoverageStats* coverage, const std::function<bool()>& timeUp = nullptr) const;
+                   CoverageStats* coverage, const std::function<bool()>& timeUp = nullptr,
+                   std::vector<int64_t>* sums = nullptr) const;
 
     static constexpr size_t kPortions = 16, kPortion = 4096;
 
