@@ -116,6 +116,18 @@ uint64_t firstPathOf(int pass, int round) {
 // The scale at which the first pass keeps its probed share's light, for the scale m chosen.
 float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
 
+// The photon rounds' noises (kernel_scale.h) from the first pass: the photons' V at the scale
+// chosen, and the direct film's, weighted by the pass's light μ as V is (1/(μ² + 0.01)).
+PhotonRoundsPlan roundsNoise(const EyePass& eye, const std::vector<float>& light, double photonNoise, Stats& stats) {
+    PhotonRoundsPlan plan;
+    for (size_t i = 0; i < light.size(); ++i)
+        plan.filmNoise += double(eye.filmNoise[i / 3][int(i % 3)]) / (double(light[i]) * light[i] + 0.01);
+    plan.photonNoise = photonNoise;
+    stats.setCount("photon_rounds_film_noise", plan.filmNoise);
+    stats.setCount("photon_rounds_photon_noise", plan.photonNoise);
+    return plan;
+}
+
 // The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h): a share (half)
 // of its indirect photons splatted in halves at scales 1 and ½. Each rank splats its share of
 // each; the halves are summed at rank 0, which chooses the scale m and tells the others. The
@@ -160,14 +172,9 @@ public:
             for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
             c_.ranks.sumAtRoot(light);
         }
-        double chosen[2] = {1.0, 1.0};  // the scale, the photon rounds
-        if (c_.ranks.rank() == 0) {
-            chosen[0] = choose(parts, seconds, gather, whole, other);
-            chosen[1] = rounds_;
-        }
-        c_.ranks.broadcast(chosen, 2);
-        const float m = float(chosen[0]);
-        rounds_ = int(chosen[1]);
+        double scale = c_.ranks.rank() == 0 ? choose(parts, seconds, gather, whole, other) : 1.0;
+        c_.ranks.broadcast(&scale, 1);
+        const float m = float(scale);
         for (int j = 0; j < 4; ++j) {  // the halves are done with: freed before the rest is splatted
             parts[j] = FixedFilm();
             slots[j] = std::vector<int64_t>();
@@ -186,14 +193,9 @@ public:
     // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
     // and half its splat at the scale chosen).
     double nextSeconds() const { return nextSeconds_; }
-    // The photon rounds of the later passes, where the first chooses them (else 1).
-    int rounds() const { return rounds_; }
-    // To choose them: the first pass's eye pass and trees, and its photons' seconds before the
-    // indirect ones' splat (tracing, the other classes' splat).
-    void timeRounds(double eyeAndTrees, double photonsBefore) {
-        eyeAndTrees_ = eyeAndTrees;
-        photonsBefore_ = photonsBefore;
-    }
+    // With a time limit where the photon rounds are chosen, at rank 0: the noises, a round's
+    // splat and the seconds left (its eye pass and photon tracing are the caller's).
+    const PhotonRoundsPlan& roundsPlan() const { return rounds_; }
 
     // Ray `index` of the first pass's photons (path order, before coverage) as that pass
     // splatted it under the probe, the scale m chosen: in its part (the other classes, the
@@ -250,7 +252,11 @@ private:
         }
         const float scale = chooseKernelScale(probe, plan);
         if (plan.timed) nextSeconds_ = plan.passOther + kWorthStarting * splatSeconds(plan, scale);
-        if (c_.cfg.photonRoundsAuto() && !eye_.filmNoise.empty()) chooseRounds(probe, plan, scale, light);
+        if (plan.timed && !eye_.filmNoise.empty()) {
+            rounds_ = roundsNoise(eye_, light, noiseAtScale(probe, scale), c_.stats);
+            rounds_.roundSeconds = splatSeconds(plan, scale);
+            rounds_.secondsLeft = plan.secondsLeft;
+        }
         const double least = expectedKernelError(probe, plan, scale);
         c_.stats.setCount("kernel_probe_gain", least > 0.0 ? expectedKernelError(probe, plan, 1.f) / least : 1.0);
         c_.stats.setCount("kernel_probe_noise", probe.noise);
@@ -260,23 +266,6 @@ private:
         return scale;
     }
 
-    // At rank 0: the later passes' photon rounds (kernel_scale.h), from the photons' noise at
-    // the scale chosen against the direct film's, weighted alike.
-    void chooseRounds(const KernelScaleProbe& probe, const KernelScalePlan& plan, float scale, const std::vector<float>& light) {
-        PhotonRoundsPlan rp;
-        for (size_t i = 0; i < values_; ++i)
-            rp.filmNoise += double(eye_.filmNoise[i / 3][int(i % 3)]) / (double(light[i]) * light[i] + 0.01);
-        rp.photonNoise = noiseAtScale(probe, scale);
-        rp.eyeSeconds = eyeAndTrees_;
-        rp.roundSeconds = photonsBefore_ + splatSeconds(plan, scale);
-        rp.secondsLeft = plan.secondsLeft;
-        rounds_ = choosePhotonRounds(rp);
-        c_.stats.setCount("photon_rounds_film_noise", rp.filmNoise);
-        c_.stats.setCount("photon_rounds_photon_noise", rp.photonNoise);
-        c_.stats.setCount("photon_rounds_eye_seconds", rp.eyeSeconds);
-        c_.stats.setCount("photon_rounds_round_seconds", rp.roundSeconds);
-    }
-
     const RenderContext& c_;
     const PassTargets& targets_;
     const EyePass& eye_;
@@ -284,8 +273,7 @@ private:
     SplatTotals& totals_;
     const size_t values_;
     double nextSeconds_ = 0.0;
-    int rounds_ = 1;
-    double eyeAndTrees_ = 0.0, photonsBefore_ = 0.0;
+    PhotonRoundsPlan rounds_;
 };
 
 }  // namespace
@@ -436,6 +424,16 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
     return needs;
 }
 
+// At rank 0, told to the others: the later passes' rounds, from the probe's plan, the first
+// pass's eye pass and trees, and its photons' seconds apart from the indirect ones' splat.
+int SplatPasses::chooseRounds(PhotonRoundsPlan plan, double photonsBefore) {
+    plan.eyeSeconds = eyeAndTrees_;
+    plan.roundSeconds += photonsBefore;
+    double rounds = c_.ranks.rank() == 0 ? choosePhotonRounds(plan) : 1.0;
+    c_.ranks.broadcast(&rounds, 1);
+    return int(rounds);
+}
+
 int SplatPasses::roundsOf(int pass) const {
     if (replaying_) return 1;
     if (c_.cfg.photonRounds > 0) return c_.cfg.photonRounds;
@@ -464,10 +462,10 @@ double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassT
     uint64_t coveredIndirect = coveredOthers;
     if (probe) {
         KernelScaleProbeStep step(c_, targets, eye, splat_, totals_);
-        step.timeRounds(eyeAndTrees_, whole_.seconds() - photonsBegan_);
+        const double photonsBefore = whole_.seconds() - photonsBegan_;  // traced, the other classes splatted
         const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), timeUp, coveredIndirect);
         nextPass_ = step.nextSeconds();
-        rounds_ = step.rounds();
+        if (c_.cfg.photonRoundsAuto()) rounds_ = chooseRounds(step.roundsPlan(), photonsBefore);
         photons_.classScale[kPhotonIndirect] = m;
         char line[160];
         std::snprintf(line, sizeof line, "indirect kernels at scale %.3g, from the bias and noise the first pass measured", m);

@@ -14,6 +14,7 @@
 #include "render_context.h"
 #include "splat/coverage.h"
 #include "splat/eye.h"
+#include "splat/kernel_scale.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
 
@@ -77,8 +78,9 @@ private:
     float receiverSpacing(int pass) const;
     PhotonMap tracePhotonsOf(int pass, int round, PhotonSettings& passSettings);
     PhotonMap storedPhotonsOf(int pass, int round, PhotonSettings& passSettings);
-    // The photon rounds of pass `pass` (docs/design.md §9).
+    // The photon rounds of pass `pass` (docs/design.md §9), and their choice under a time limit.
     int roundsOf(int pass) const;
+    int chooseRounds(PhotonRoundsPlan plan, double photonsBefore);
     // `sums`: where the indirect photons' receivers' sums wait for the pass's gather (rounds).
     double splatPass(int pass, int round, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
                      const PhotonSettings& passSettings, FixedFilm& sum, const std::function<bool()>& timeUp,
