@@ -99,7 +99,7 @@ private:
     SplatTotals totals_;
     const bool probing_, sparse_, measuresCoverage_;
     bool replaying_ = false;
-    int traced_ = 0;  // passes whose photons this render traced (stats: photon_passes_traced)
+    int traced_ = 0;  // rounds (passes) whose photons this render traced (stats: photon_passes_traced)
     double nextPass_ = 0.0;  // the probe's estimate of a later pass's seconds
     int rounds_ = 1;         // the photon rounds of the passes after the first, where it chooses them
     double eyeAndTrees_ = 0.0, photonsBegan_ = 0.0;  // the first pass's: seconds, and whole_'s at its photons
