@@ -117,7 +117,7 @@ public:
             const uint32_t index = uint32_t(st_.firstDirectSample + s);
             const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
             Sampler sampler(st_.seed, Stage::DirectFilm, key);
-            const Vec3 before = filmLight(pixel);
+            const Vec3 before = noise ? filmLight(pixel) : Vec3(0.f);
             const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
             followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
                             Vec3(invFilm), pixelCone_, st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
@@ -128,7 +128,7 @@ public:
                 addDirect(pixel, weight, estimateDirectAcrossSamples(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
                                                                      lightScramble, index, ds));
             });
-            halves[2 * s >= st_.directSpp] += filmLight(pixel) - before;
+            if (noise) halves[2 * s >= st_.directSpp] += filmLight(pixel) - before;
         }
         if (noise && st_.directSpp >= 2) {
             const Vec3 d = halves[0] - halves[1];  // each half's mean is 2 × its sum
