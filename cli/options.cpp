@@ -196,9 +196,14 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
              "with --visibility rays, probe rays a photon measuring its kernel's coverage (default " +
                  std::to_string(d.splat.coverageProbes) + ", 0.." + std::to_string(CoverageSettings::kMaxProbes) + "; 0: no correction)",
              [&](const std::string& v) { cfg.coverageProbes = parseNumber<int>("--coverage-probes", v); }});
+    cmd.add({"--coverage-at", "WHERE",
+             "where the kernels' coverage corrects their loss at edges and corners: samples (each sample by the share of "
+             "its own kernel that arrives, where a kernel lands on one plane; elsewhere the photon) or photons (each "
+             "photon's flux by the share of its kernel that arrives); default samples",
+             [&](const std::string& v) { cfg.coverageAtSamples = parseCoverageAt(v); }});
     cmd.add({"--min-coverage", "C",
-             "the least coverage a photon's flux is divided by: fewer fireflies on thin parts, for a measured bias under 0.5 % "
-             "of the indirect light "
+             "the least share of a kernel that a photon's flux or a sample's light is divided by: fewer fireflies on thin "
+             "parts, for a measured bias under 0.5 % of the indirect light "
              "(default " + numberText(d.splat.minCoverage) + ", 0..1; 0: none)",
              [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
     cmd.add({"--receiver-spacing", "F",

@@ -53,6 +53,12 @@ Visibility parseVisibility(const std::string& name) {
     throw Error(ErrorKind::Config, "`visibility` " + name + ": unknown visibility (auto, mask, rays)");
 }
 
+bool parseCoverageAt(const std::string& name) {
+    if (name == "samples") return true;
+    if (name == "photons") return false;
+    throw Error(ErrorKind::Config, "`coverage-at` " + name + ": unknown place (samples, photons)");
+}
+
 ClassTriple RenderConfig::photonSplit() const {
     ClassTriple out = split;
     if (!splitSet && directBySampling()) out[0] = 0.f;
@@ -254,6 +260,7 @@ ImageAttributes RenderConfig::attributes() const {
             a["visibility"] = visibilityName(visibilityUsed());
             if (visibilityUsed() == Visibility::Rays) a["coverageProbes"] = std::to_string(coverageProbes);
             if (visibilityUsed() == Visibility::Rays) a["minCoverage"] = std::to_string(minCoverage);
+            if (visibilityUsed() == Visibility::Rays) a["coverageAt"] = coverageAtSamples ? "samples" : "photons";
             if (visibilityUsed() == Visibility::Rays) a["receiverSpacing"] = numberText(receiverSpacing);
         }
     }

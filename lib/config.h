@@ -38,6 +38,7 @@ DirectMethod parseDirectMethod(const std::string& name);  // throws Error(Config
 enum class Visibility { Auto, Mask, Rays };
 const char* visibilityName(Visibility v);
 Visibility parseVisibility(const std::string& name);  // throws Error(Config)
+bool parseCoverageAt(const std::string& name);       // samples: true, photons: false; throws Error(Config)
 
 // A per-class triple as "a,b,c", each number in its shortest form (%g): the EXR header's
 // settings and --help's defaults.
@@ -137,9 +138,13 @@ struct RenderConfig {
     // Probes a photon for its kernel's coverage with `visibility` rays (0: none, the kernels'
     // light past edges and corners lost). Defaults: CoverageSettings.
     int coverageProbes = CoverageSettings{}.probes;
-    // The least coverage a photon's flux is divided by: a bound on its weight against fireflies,
-    // at a measured bias (CoverageSettings::minCoverage). 0: none.
+    // The least share of a kernel a photon's flux (or, at the samples, a sample's light) is divided
+    // by: a bound on its weight against fireflies, at a measured bias (CoverageSettings::minCoverage).
+    // 0: none.
     float minCoverage = CoverageSettings{}.minCoverage;
+    // Where a kernel lands on one plane, its loss at edges and corners is corrected at each sample
+    // (true: KernelEdge) rather than by dividing the photon's flux (false).
+    bool coverageAtSamples = CoverageSettings{}.atSamples;
     // The indirect photons' receivers, this many of the smallest indirect kernel radius apart
     // (IrradianceSettings); 0: every eye sample. Only with visibility by rays.
     float receiverSpacing = IrradianceSettings{}.spacing;

@@ -52,6 +52,7 @@ CoverageSettings coverageSettings(const RenderConfig& cfg) {
     CoverageSettings cs;
     cs.probes = cfg.coverageProbes;
     cs.minCoverage = cfg.minCoverage;
+    cs.atSamples = cfg.coverageAtSamples;
     cs.seed = cfg.seed;
     return cs;
 }
@@ -87,17 +88,18 @@ PhotonRay replayedRay(const RenderContext& c, const PhotonMap& photons) {
     return photons.rays[size_t(c.cfg.replayIndex)];
 }
 
-// One line: the replayed ray's class, ends, flux, kernel and the coverage its flux was divided by.
-void reportReplayed(const RenderContext& c, const PhotonRay& traced, const PhotonRay& ray, float voxel) {
+// One line: the replayed ray's class, ends, flux, kernel and the coverage its flux was divided by,
+// and the lines across its kernel by which its samples divide their light (KernelEdge).
+void reportReplayed(const RenderContext& c, const PhotonRay& traced, const PhotonRay& ray, float voxel, int lines) {
     const Vec3 hit = ray.origin + ray.length * ray.dir;
     const float divided = luminance(ray.flux) > 0.f ? luminance(traced.flux) / luminance(ray.flux) : 0.f;
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "photon ray %lld of pass %d: %s, from (%.4g, %.4g, %.4g) to (%.4g, %.4g, %.4g), flux (%.4g, %.4g, %.4g) W, "
-                  "radius %.4g m (%.3g voxels), reach %.3g radii, flux divided by coverage %.3g",
+                  "radius %.4g m (%.3g voxels), reach %.3g radii, flux divided by coverage %.3g, %d kernel edge%s at the samples",
                   (long long)c.cfg.replayIndex, c.cfg.replayPass, photonClassName(ray.cls), ray.origin.x, ray.origin.y,
                   ray.origin.z, hit.x, hit.y, hit.z, ray.flux.x, ray.flux.y, ray.flux.z, ray.radius,
-                  ray.radius / voxel, ray.reach, divided);
+                  ray.radius / voxel, ray.reach, divided, lines, lines == 1 ? "" : "s");
     c.reporter.info(buf);
 }
 
@@ -301,8 +303,9 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonSto
     }
     photons_ = photonSettings(c.cfg, grid_->geometry.voxelSize);
     // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
-    // photons that reach an eye sample (docs/design.md §8); stored photons have theirs already.
-    splat_.coverage = measuresCoverage_ && !store ? &coverage_ : nullptr;
+    // photons that reach an eye sample (docs/design.md §8), stored photons too: where a kernel
+    // lands on one plane its samples correct its loss, and every frame has its own samples.
+    splat_.coverage = measuresCoverage_ ? &coverage_ : nullptr;
     c.stats.setCount("photon_passes_traced", 0);  // by this render: none where a store had them all
 }
 
@@ -358,20 +361,14 @@ PhotonMap SplatPasses::tracePhotonsOf(int pass, int round, PhotonSettings& passS
     return photons;
 }
 
-// The pass's photons from the store, traced (with every kernel's coverage) when it has none yet.
-// The coverage of a kernel is a function of the ray alone (seed, pass, ray), so measuring it
-// for every photon here gives each frame the light the splat's own measurement would.
+// The pass's photons from the store, traced when it has none yet. Their coverage is measured
+// by each frame's splat, as a render without a store measures it: a function of the ray and the
+// samples it reaches, so each frame gets the light its own render would.
 PhotonMap SplatPasses::storedPhotonsOf(int pass, int round, PhotonSettings& passSettings) {
     const int key = pass * RenderConfig::kMaxPhotonRounds + round;
     auto it = store_->passes.find(key);
     if (it == store_->passes.end()) {
         PhotonMap photons = tracePhotonsOf(pass, round, passSettings);
-        if (measuresCoverage_) {
-            Timer t;
-            coverage_.pass = uint64_t(pass);
-            normalizeKernelCoverage(c_.accel, photons, coverage_, c_.pool, c_.reporter, &totals_.coverage);
-            c_.stats.addTime("coverage", t.seconds());
-        }
         ++store_->traced;
         it = store_->passes.emplace(key, std::move(photons)).first;
     } else {  // the settings tracePhotonsOf gave them
@@ -501,8 +498,9 @@ void SplatPasses::replayRay(PhotonMap& photons, const PhotonSettings& passSettin
     PhotonRay covered = ray;  // as the splat will cover it
     CoverageStats unused;
     coverage_.pass = uint64_t(c_.cfg.replayPass);
-    if (measuresCoverage_) normalizeCoverage(c_.accel, covered, coverage_, unused);
-    reportReplayed(c_, traced, covered, grid_->geometry.voxelSize);
+    KernelEdge edge;
+    if (measuresCoverage_) normalizeCoverage(c_.accel, covered, coverage_, unused, &edge);
+    reportReplayed(c_, traced, covered, grid_->geometry.voxelSize, edge.lines);
 }
 
 void SplatPasses::replay(FixedFilm& sum) {

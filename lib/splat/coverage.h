@@ -4,13 +4,17 @@
 // convex edge or a thin part it lands on nothing within the cylinder, and on fine geometry on
 // samples the receiver rules refuse. That part's light is lost, and more of it the larger the
 // kernel. Probes along the disc's rays, distributed as the kernel, measure the share that
-// arrives; the photon's flux is divided by it, so each photon delivers its flux. A kernel
-// that mostly misses is halved first and measured again (kShrinkBelow).
+// arrives. Where the kernel lands on one plane, the lines that cut it there are found instead
+// (KernelEdge), and each sample divides the light it receives by the share of its own kernel on
+// their arriving side; elsewhere the photon's flux is divided by the share, so that each photon
+// delivers its flux, and a kernel that mostly misses is halved first and measured again
+// (kShrinkBelow).
 // World space; the probes are Embree rays.
 #pragma once
 
 #include <cstdint>
 
+#include "core/math.h"
 #include "core/stats.h"
 
 namespace rs {
@@ -38,7 +42,8 @@ struct CoverageSettings {
     // 1.73e-3; interior 3.53e-3 → 3.75e-3 in the same time (threshold 0.75: 3.52e-5, 5.83e-5,
     // 1.79e-3, 3.95e-3; halving to 0.9, twice: 1.08e-4, 1.59e-4, 2.38e-3, 5.79e-3).
     static constexpr float kShrinkBelow = 0.6f;
-    // The flux is divided by at least this (0: by the coverage however small). A photon whose
+    // The flux is divided by at least this (0: by the coverage however small), and so is a
+    // sample's light by its share with kernel edges (KernelEdge). A photon whose
     // kernel lands mostly on nothing (a chandelier's arms, a thin frame) delivers its flux to a
     // small part of it: with 8 probes one arriving multiplies the flux by 8, and these rare,
     // heavy photons are the fireflies. On the staircase (180×320, 8 passes, two seeds against
@@ -52,15 +57,18 @@ struct CoverageSettings {
     // Counts only the surfaces within PhotonRay::kReceiverWindow radii of x(i), as the splat
     // takes them (SplatSettings::receiverWindow).
     bool receiverWindow = true;
+    // Where the kernel lands on one plane: the loss at the samples (KernelEdge), not the photon.
+    bool atSamples = true;
     uint64_t seed = 0;       // with the pass: the probes' rotation, a function of (seed, pass, photon)
     uint64_t pass = 0;
 };
 
-// Photons probed; with coverage below 1; with none; kernels
-// halved (coverage below kShrinkBelow).
+// Photons probed; with coverage below 1; with none; kernels halved (coverage below
+// kShrinkBelow); kernels on one plane, whose loss the samples correct (KernelEdge).
 #define RS_COVERAGE_COUNTERS(X)                                                                      \
     X(photons, "coverage_photons") X(partial, "coverage_photons_partial")                            \
-    X(uncovered, "coverage_photons_uncovered") X(shrunk, "coverage_photons_shrunk")
+    X(uncovered, "coverage_photons_uncovered") X(shrunk, "coverage_photons_shrunk")                  \
+    X(atSamples, "coverage_photons_at_samples")
 struct CoverageStats {
     RS_COVERAGE_COUNTERS(RS_COUNTER_MEMBER)
     double coverageSum = 0.0;  // sum of the photons' coverage
@@ -74,14 +82,48 @@ struct CoverageStats {
     }
 };
 
+// Where a photon's kernel is cut, for the samples it reaches (normalizeCoverage). Dividing the
+// photon's flux by the share c of its kernel that arrives keeps the photon's flux but not the light
+// at each place: near a face's rim a sample's light comes from photons whose kernels lose less
+// than its own would, so the rim came out too dark and the band inside it too bright (under
+// point_shadows' point light 5–10 % either way at the kernel scale 0.5). Dividing each sample's
+// light by the share of a kernel centred on the sample that arrives is right wherever the loss is
+// fixed in the scene, the same for every photon near it: a face's edge, a corner. On a plane the
+// loss is cut off by straight lines, so a photon's kernel carries up to two:
+//     sample y receives its light × 1 / max(Π_k G(t0_k + e_k·(y − x(i−1))), minCoverage)
+// with e_k ⊥ ω towards the side that arrives (in 1/radius) and G(t) the share of the biweight
+// kernel on the side of a line at t radii from its centre.
+struct KernelEdge {
+    int lines = 0;
+    Vec3 e[2] = {Vec3(0.f), Vec3(0.f)};
+    float t0[2] = {1.f, 1.f};
+    // A kernel lands on one plane when every probe that arrives lies within this share of the
+    // radius of the hit's plane, its normal within 25.8°.
+    static constexpr float kPlaneTolerance = 0.05f, kPlaneCos = 0.9f;
+    // G(t): the share of the unit biweight kernel on the side x > −t of a line (G(−1) = 0, G(1) = 1).
+    static float share(float t);
+    static float shareInverse(float c);
+    // Π_k G(t0_k + across_k), across_k = e_k·(y − x(i−1)).
+    float shareAt(const float across[2]) const {
+        float g = 1.f;
+        for (int k = 0; k < lines; ++k) g *= share(t0[k] + across[k]);
+        return g;
+    }
+};
+
 // Measures one photon ray's kernel coverage c, halves the kernel and measures again where c <
 // kShrinkBelow, and divides the flux by max(c, minCoverage) (a photon whose probes all miss
 // keeps its flux: nothing measured to divide by). The probes' turn is a function of (seed, pass,
 // the ray itself), so a ray's coverage does not depend on which map or thread holds it. The
 // splat measures it for the photons that reach an eye sample, just before their light lands.
-void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& stats);
+// With `edge` and settings.atSamples, where the kernel lands on one plane (kernelEdges in
+// coverage.cpp), the flux is divided only by the share the edge's lines leave out, and the samples
+// correct the rest (edge->lines > 0); elsewhere edge->lines is 0.
+void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& stats,
+                       KernelEdge* edge = nullptr);
 
-// normalizeCoverage for every photon ray of the map.
+// normalizeCoverage for every photon ray of the map (without edges: a stored map's photons have
+// no samples yet).
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
                              ThreadPool& pool, Reporter& reporter, CoverageStats* stats = nullptr);
 

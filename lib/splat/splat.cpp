@@ -177,8 +177,9 @@ struct Lanes4 {
 class PhotonSplat {
 public:
     PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, const SplatSettings& settings,
-                int64_t* layer, SplatStats& stats)
-        : samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), begin_(ray.kernelBegin(settings.receiverWindow)),
+                int64_t* layer, SplatStats& stats, const KernelEdge* edge = nullptr)
+        : edge_(edge && edge->lines > 0 ? edge : nullptr), least_(settings.coverage ? settings.coverage->minCoverage : 0.f),
+          samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), begin_(ray.kernelBegin(settings.receiverWindow)),
           end_(ray.kernelEnd(settings.receiverWindow)),
           kernelScale_(3.f / (kPi * h2_)), visibility_(settings.visibility), batches_(settings.batches), layer_(layer),
           stats_(stats), receivers_(accel, ray, settings.visibility && settings.visibilityPlanes, settings.receiverWindow),
@@ -189,6 +190,9 @@ public:
             four_.flux[a] = _mm_set1_ps(ray.flux[a]), four_.originNormal[a] = _mm_set1_ps(receivers_.originNormal()[a]);
         }
         four_.begin = _mm_set1_ps(begin_), four_.end = _mm_set1_ps(end_), four_.h2 = _mm_set1_ps(h2_), four_.kernelScale = _mm_set1_ps(kernelScale_);
+        if (edge_)
+            for (int k = 0; k < 2; ++k)
+                for (int a = 0; a < 3; ++a) four_.edge[k][a] = _mm_set1_ps(edge_->e[k][a]);
 #endif
     }
 
@@ -226,7 +230,11 @@ public:
         }
         // Equation (2): w · f_r · Φ · K_h(d⊥) · |n·ω| · V, the sample's w · f_r stored.
         const Vec3 f = samples_.weightedF(i, -w, -cosTheta, shadowing(i));
-        const float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
+        float scale = biweightKernel(std::max(d2, 0.f), h2_) * -cosTheta * visibility;
+        if (edge_) {
+            const float across[2] = {glm::dot(oy, edge_->e[0]), glm::dot(oy, edge_->e[1])};
+            scale *= edgeFactor(across);
+        }
         const Vec3 c = f * ray_.flux * scale;
         if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !isFinite(c)) return;
         if (visibility_) {
@@ -270,6 +278,11 @@ public:
     }
 
 private:
+    // With kernel edges (coverage.h's KernelEdge): 1 / the share of the sample's own kernel on
+    // their arriving side, given its e_k·(y − x(i−1)), at most 1 / minCoverage.
+    float edgeFactor(const float across[2]) const {
+        return 1.f / std::max(edge_->shareAt(across), std::max(least_, 1e-3f));
+    }
     // Into the film now when rule 2 is already decided (visible), else when Embree has said.
     void deposit(uint32_t i, const Vec3& c, bool visible, const Vec3& lifted) {
         int64_t* px = &layer_[size_t(samples_.pixel[i]) * 3];
@@ -295,6 +308,8 @@ private:
     int waitingCount_ = 0;
 #endif
 
+    const KernelEdge* const edge_;  // null: none, the photon's flux corrects its kernel's loss
+    const float least_;
     const EyeSamples& samples_;
     const Vec3* const units_ = unitTable();
     const PhotonRay& ray_;
@@ -306,7 +321,7 @@ private:
     PendingContributions pending_;
 #if defined(__SSE2__)
     struct FourLanes {  // the ray's numbers for receive4, each in all four lanes, set once a photon
-        __m128 origin[3], dir[3], flux[3], originNormal[3], begin, end, h2, kernelScale;
+        __m128 origin[3], dir[3], flux[3], originNormal[3], begin, end, h2, kernelScale, edge[2][3];
     } four_;
 #endif
 };
@@ -314,7 +329,8 @@ private:
 #if defined(__SSE2__)
 // receiveOne(index[k], visibility[k] or 1) for up to four samples (with visibility): every step
 // the same operations in the same order, one lane a sample, so the same sums; the BSDF is read
-// lane by lane. Lanes4 past `count` repeat the first sample and are dropped.
+// lane by lane, and so are the kernel edges' shares. Lanes4 past `count` repeat the first sample and
+// are dropped.
 void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int count) {
     const uint32_t lane[4] = {index[0], count > 1 ? index[1] : index[0], count > 2 ? index[2] : index[0],
                               count > 3 ? index[3] : index[0]};
@@ -349,7 +365,17 @@ void PhotonSplat::receive4(const uint32_t* index, const float* visibility, int c
     const __m128 v = visibility ? _mm_setr_ps(visibility[0], count > 1 ? visibility[1] : 1.f, count > 2 ? visibility[2] : 1.f,
                                               count > 3 ? visibility[3] : 1.f)
                                 : _mm_set1_ps(1.f);
-    const __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
+    __m128 scale = _mm_mul_ps(_mm_mul_ps(kernel, minusCos), v);
+    if (edge_) {
+        alignas(16) float across[2][4], factor[4];
+        _mm_store_ps(across[0], oy.dot(four_.edge[0]));
+        _mm_store_ps(across[1], oy.dot(four_.edge[1]));
+        for (int k = 0; k < 4; ++k) {
+            const float a[2] = {across[0][k], across[1][k]};
+            factor[k] = edgeFactor(a);
+        }
+        scale = _mm_mul_ps(scale, _mm_load_ps(factor));
+    }
     const Lanes4 f = weightedF4(lane, live, minusCos);
     const Lanes4 c{_mm_mul_ps(_mm_mul_ps(f.x, four_.flux[0]), scale), _mm_mul_ps(_mm_mul_ps(f.y, four_.flux[1]), scale),
                   _mm_mul_ps(_mm_mul_ps(f.z, four_.flux[2]), scale)};
@@ -517,8 +543,9 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                     ++stats[thread].unseen;
                     continue;
                 }
-                normalizeCoverage(accel, ray, *settings.coverage, coverage[thread]);
-                PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread]);
+                KernelEdge edge;
+                normalizeCoverage(accel, ray, *settings.coverage, coverage[thread], &edge);
+                PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], &edge);
                 splat.receiveSeen(r.index.data(), r.visibility.data(), r.index.size());
                 splat.finish();
                 continue;
