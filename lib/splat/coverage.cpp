@@ -212,8 +212,19 @@ const std::vector<float>& shareTable() {
     return table;
 }
 
-// Divides the flux by the coverage c (at least minCoverage), halving the kernel first where c is
-// below kShrinkBelow.
+// Counts a photon of coverage c in the stats and divides its flux by `share` (at least
+// minCoverage); a photon none of whose probes arrived keeps its flux: nothing measured to divide by.
+void divideFlux(PhotonRay& ray, float c, float share, const CoverageSettings& settings, CoverageStats& st) {
+    ++st.photons;
+    st.coverageSum += c;
+    if (c < 1.f) ++st.partial;
+    if (c > 0.f)
+        ray.flux /= std::max(share, settings.minCoverage);
+    else
+        ++st.uncovered;
+}
+
+// Divides the flux by the coverage c, halving the kernel first where c is below kShrinkBelow.
 void divideByCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& st, float turn,
                       float c) {
     if (c < CoverageSettings::kShrinkBelow) {
@@ -223,13 +234,7 @@ void divideByCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSetti
         c = coverageOf(accel, ray, settings.probes, turn, settings.receiverWindow);
         ++st.shrunk;
     }
-    ++st.photons;
-    st.coverageSum += c;
-    if (c < 1.f) ++st.partial;
-    if (c > 0.f)
-        ray.flux /= std::max(c, settings.minCoverage);
-    else
-        ++st.uncovered;
+    divideFlux(ray, c, c, settings, st);
 }
 
 }  // namespace
@@ -262,13 +267,8 @@ void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSett
         divideByCoverage(accel, ray, settings, st, turn, c);
         return;
     }
-    ++st.photons, ++st.atSamples;
-    st.coverageSum += c;
-    if (c < 1.f) ++st.partial;
-    if (c > 0.f)
-        ray.flux /= std::max(rest, settings.minCoverage);
-    else
-        ++st.uncovered;
+    ++st.atSamples;
+    divideFlux(ray, c, rest, settings, st);
 }
 
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
