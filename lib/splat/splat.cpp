@@ -17,21 +17,16 @@
 #include "core/stats.h"
 #include "core/log.h"
 #include "core/parallel.h"
+#include "splat/pending.h"
 
 namespace rs {
 
 namespace {
 
-constexpr double kFixedScale = FixedFilm::kScale;
 constexpr int kSplatLayers = 3;               // direct, indirect, caustic = photon classes
 static_assert(int(kPhotonDirect) == int(kDirect) && int(kPhotonIndirect) == int(kIndirect) &&
                   int(kPhotonCaustic) == int(kCaustic),
               "photon classes index the film's layers");
-
-inline int64_t toFixed(float v) {
-    double x = double(v) * kFixedScale;
-    return x < 9.0e18 ? int64_t(x + 0.5) : int64_t(9.0e18);
-}
 
 // The 65536 unit vectors of the 16-bit octahedral code, decoded once: the splat decodes two a
 // contribution, and a table read (neighbouring samples share their normals) costs less than
@@ -76,70 +71,6 @@ std::vector<uint32_t> coherentOrder(const PhotonMap& photons, const GridGeometry
     for (size_t i = 0; i < n; ++i) order[i] = uint32_t(keyed[i]);
     return order;
 }
-
-}  // namespace
-
-namespace {
-
-// Contributions waiting for rule 2, which is asked a packet at a time; those whose sample
-// turns out hidden are dropped, the others added to the thread's film buffer.
-class PendingContributions {
-public:
-    PendingContributions(const SegmentReceivers& receivers, SplatStats& stats) : receivers_(receivers), stats_(stats) {}
-    ~PendingContributions() { flush(); }
-
-    void add(const Vec3& lifted, int64_t* pixel, const Vec3& c) {
-        lifted_[count_] = lifted, pixel_[count_] = pixel, c_[count_] = c;
-        if (++count_ == RayAccel::kPacket) flush();
-    }
-    void flush() {
-        if (count_ == 0) return;
-        const uint32_t hidden = receivers_.hidden(lifted_, count_);
-        stats_.visibilityRays += uint64_t(count_);
-        for (int i = 0; i < count_; ++i) {
-            if (hidden >> i & 1u) {
-                ++stats_.refusedHidden;
-                continue;
-            }
-            addFixed(pixel_[i], c_[i]);
-            ++stats_.contributions;
-        }
-        count_ = 0;
-    }
-    // Adds c (non-negative, finite) to a pixel's three fixed-point sums.
-    static void addFixed(int64_t* px, const Vec3& c) {
-#if defined(__SSE2__)
-        // toFixed two lanes at a time where every value is below 2^51: there x + 0.5 is the same
-        // double, and its truncation is the integer part of (x + 0.5) + 2^52 (round to nearest),
-        // less one where that rounded up.
-        const __m128d scale = _mm_set1_pd(kFixedScale), limit = _mm_set1_pd(2251799813685248.0);  // 2^51
-        const __m128d xy = _mm_mul_pd(_mm_cvtps_pd(_mm_setr_ps(c.x, c.y, 0.f, 0.f)), scale);
-        const __m128d z = _mm_mul_pd(_mm_cvtps_pd(_mm_set_ss(c.z)), scale);
-        if (_mm_movemask_pd(_mm_and_pd(_mm_cmplt_pd(xy, limit), _mm_cmplt_pd(z, limit))) == 3) {
-            auto truncHalfUp = [](__m128d x) {
-                const __m128d big = _mm_set1_pd(4503599627370496.0);  // 2^52
-                const __m128d y = _mm_add_pd(x, _mm_set1_pd(0.5)), r = _mm_add_pd(y, big);
-                const __m128i n = _mm_sub_epi64(_mm_castpd_si128(r), _mm_castpd_si128(big));
-                return _mm_add_epi64(n, _mm_castpd_si128(_mm_cmpgt_pd(_mm_sub_pd(r, big), y)));
-            };
-            __m128i* pxy = reinterpret_cast<__m128i*>(px);
-            _mm_storeu_si128(pxy, _mm_add_epi64(_mm_loadu_si128(pxy), truncHalfUp(xy)));
-            px[2] += _mm_cvtsi128_si64(truncHalfUp(z));
-            return;
-        }
-#endif
-        px[0] += toFixed(c.x);
-        px[1] += toFixed(c.y);
-        px[2] += toFixed(c.z);
-    }
-
-private:
-    const SegmentReceivers& receivers_;
-    SplatStats& stats_;
-    int count_ = 0;
-    Vec3 lifted_[RayAccel::kPacket], c_[RayAccel::kPacket];
-    int64_t* pixel_[RayAccel::kPacket];
-};
 
 }  // namespace
 
