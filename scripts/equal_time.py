@@ -14,7 +14,8 @@ Both images are measured against a converged reference: two path-traced halves, 
 (mean((x − ref)² / (ref² + 0.01))) is given twice: over every pixel, and with the 0.1 % of
 pixels of largest error left out, so that a few fireflies do not carry a lead. The ratio is
 Mitsuba's error over raysplat's: above 1, raysplat is ahead. Also printed: raysplat's passes
-and stage seconds, each layer's mean over the reference's. Results go to OUT/NAME.json.
+and stage seconds, each layer's mean over the reference's. Results go to OUT/NAME.json, beside
+both renderers' images.
 """
 
 import argparse
@@ -137,6 +138,8 @@ def main():
                 "; means " + " ".join(f"{k} {v:.3f}" for k, v in r["means"].items()))
         if xml:
             theirs, spp, used = mitsuba_for(xml, wall, seed)
+            # Kept, so that both renderers can be measured again against another reference.
+            images.write_exr(os.path.join(outdir, f"mitsuba{args.tag}_{width}x{height}_t{args.time_limit:g}_s{seed}.exr"), theirs)
             r["mitsuba"] = errors(theirs, ref["beauty"])
             r["mitsuba_spp"], r["mitsuba_seconds"] = spp, used
             r["ratio"] = [m / o if o > 0 else float("inf") for m, o in zip(r["mitsuba"], r["ours"])]
