@@ -222,7 +222,7 @@ private:
             return;
         }
         if (visibility_) ++stats_.visibleByPlanes;
-        PendingContributions::addFixed(px, c);
+        addFixed(px, c);
         ++stats_.contributions;
     }
 #if defined(__SSE2__)
@@ -249,7 +249,7 @@ private:
     int64_t* layer_;
     SplatStats& stats_;
     const SegmentReceivers receivers_;
-    PendingContributions pending_;
+    PendingContributions<SegmentReceivers, SplatStats> pending_;
 #if defined(__SSE2__)
     struct FourLanes {  // the ray's numbers for receive4, each in all four lanes, set once a photon
         __m128 origin[3], dir[3], flux[3], originNormal[3], begin, end, h2, kernelScale, edge[2][3];
@@ -370,7 +370,7 @@ void PhotonSplat::deposit4(const uint32_t lane[4], uint32_t live, const Lanes4& 
         const int k = __builtin_ctz(bits);
         int64_t* px = &layer_[size_t(pixel[lane[k]]) * 3];
         if (sure >> k & 1u)
-            PendingContributions::addFixed(px, Vec3(cx[k], cy[k], cz[k]));
+            addFixed(px, Vec3(cx[k], cy[k], cz[k]));
         else
             pending_.add(Vec3(lx[k], ly[k], lz[k]), px, Vec3(cx[k], cy[k], cz[k]));
     }
