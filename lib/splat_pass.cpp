@@ -59,6 +59,7 @@ CoverageSettings coverageSettings(const RenderConfig& cfg) {
 
 SplatSettings splatSettings(const RenderConfig& cfg) {
     SplatSettings splat;
+    splat.minCoverage = cfg.minCoverage;
     splat.visibility = cfg.method == Method::Splat;
     splat.receiverWindow = cfg.visibilityByRays();
     return splat;
@@ -107,6 +108,7 @@ void reportReplayed(const RenderContext& c, const PhotonRay& traced, const Photo
 PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
     PhotonMap out = photons;
     out.rays.assign(photons.rays.begin() + first, photons.rays.begin() + last);
+    if (!photons.edges.empty()) out.edges.assign(photons.edges.begin() + first, photons.edges.begin() + last);
     return out;
 }
 
@@ -303,9 +305,8 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonSto
     }
     photons_ = photonSettings(c.cfg, grid_->geometry.voxelSize);
     // The kernels' coverage is measured by the splat, as the receiver rules will see it, for the
-    // photons that reach an eye sample (docs/design.md §8), stored photons too: where a kernel
-    // lands on one plane its samples correct its loss, and every frame has its own samples.
-    splat_.coverage = measuresCoverage_ ? &coverage_ : nullptr;
+    // photons that reach an eye sample (docs/design.md §8); stored photons have theirs already.
+    splat_.coverage = measuresCoverage_ && !store ? &coverage_ : nullptr;
     c.stats.setCount("photon_passes_traced", 0);  // by this render: none where a store had them all
 }
 
@@ -361,14 +362,20 @@ PhotonMap SplatPasses::tracePhotonsOf(int pass, int round, PhotonSettings& passS
     return photons;
 }
 
-// The pass's photons from the store, traced when it has none yet. Their coverage is measured
-// by each frame's splat, as a render without a store measures it: a function of the ray and the
-// samples it reaches, so each frame gets the light its own render would.
+// The pass's photons from the store, traced (with every kernel's coverage and edges) when it has
+// none yet. The coverage of a kernel is a function of the ray alone (seed, pass, ray), so
+// measuring it for every photon here gives each frame the light the splat's own measurement would.
 PhotonMap SplatPasses::storedPhotonsOf(int pass, int round, PhotonSettings& passSettings) {
     const int key = pass * RenderConfig::kMaxPhotonRounds + round;
     auto it = store_->passes.find(key);
     if (it == store_->passes.end()) {
         PhotonMap photons = tracePhotonsOf(pass, round, passSettings);
+        if (measuresCoverage_) {
+            Timer t;
+            coverage_.pass = uint64_t(pass);
+            normalizeKernelCoverage(c_.accel, photons, coverage_, c_.pool, c_.reporter, &totals_.coverage);
+            c_.stats.addTime("coverage", t.seconds());
+        }
         ++store_->traced;
         it = store_->passes.emplace(key, std::move(photons)).first;
     } else {  // the settings tracePhotonsOf gave them

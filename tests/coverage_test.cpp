@@ -55,6 +55,7 @@ double meanCoverage(const Scene& scene, const PhotonRay& ray, int count, bool re
     }
     CoverageSettings cs;
     cs.receiverWindow = receiverWindow;
+    cs.atSamples = false;  // the photon's own coverage divides its flux
     CoverageStats stats;
     normalizeKernelCoverage(accel, map, cs, pool, silentReporter(), &stats);
     double sum = 0.0;

@@ -276,10 +276,12 @@ void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const Co
     constexpr int64_t kChunk = 1024;
     const int64_t n = int64_t(photons.rays.size());
     std::vector<CoverageStats> stats(size_t((n + kChunk - 1) / kChunk));
+    photons.edges.assign(settings.atSamples ? size_t(n) : 0, KernelEdge());
     reporter.begin("kernel coverage", n, "photons");
     pool.parallelFor(n, kChunk, [&](int64_t b, int64_t e, int) {
         CoverageStats& st = stats[size_t(b / kChunk)];
-        for (int64_t i = b; i < e; ++i) normalizeCoverage(accel, photons.rays[size_t(i)], settings, st);
+        for (int64_t i = b; i < e; ++i)
+            normalizeCoverage(accel, photons.rays[size_t(i)], settings, st, settings.atSamples ? &photons.edges[size_t(i)] : nullptr);
         reporter.advance(e - b);
     });
     reporter.end();

@@ -122,8 +122,9 @@ struct KernelEdge {
 void normalizeCoverage(const RayAccel& accel, PhotonRay& ray, const CoverageSettings& settings, CoverageStats& stats,
                        KernelEdge* edge = nullptr);
 
-// normalizeCoverage for every photon ray of the map (without edges: a stored map's photons have
-// no samples yet).
+// normalizeCoverage for every photon ray of the map, their edges (with settings.atSamples) kept
+// in photons.edges: a walkthrough's store measures them once for every frame, each the same
+// function of the ray as the splat's own measurement.
 void normalizeKernelCoverage(const RayAccel& accel, PhotonMap& photons, const CoverageSettings& settings,
                              ThreadPool& pool, Reporter& reporter, CoverageStats* stats = nullptr);
 

@@ -12,6 +12,7 @@
 
 #include "core/math.h"
 #include "core/sampling.h"
+#include "splat/coverage.h"
 
 namespace rs {
 
@@ -95,10 +96,13 @@ struct Stats;
 
 struct PhotonMap {
     std::vector<PhotonRay> rays;               // in path order
+    // Kept in a walkthrough's store: each ray's kernel edges, its coverage already measured and
+    // its flux divided (normalizeKernelCoverage). Empty: the splat measures them.
+    std::vector<KernelEdge> edges;
     int64_t pathsFor[kPhotonClassCount] = {};  // N_c: paths emitted until the quota filled
     int64_t count[kPhotonClassCount] = {};
     int64_t pathsTraced = 0;
-    size_t bytes() const { return rays.size() * sizeof(PhotonRay); }
+    size_t bytes() const { return rays.size() * sizeof(PhotonRay) + edges.size() * sizeof(KernelEdge); }
     void report(Stats& stats) const;  // photons_<class> and photon_paths counts
 };
 

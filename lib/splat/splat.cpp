@@ -109,7 +109,7 @@ class PhotonSplat {
 public:
     PhotonSplat(const RayAccel& accel, const EyeSamples& samples, const PhotonRay& ray, const SplatSettings& settings,
                 int64_t* layer, SplatStats& stats, const KernelEdge* edge = nullptr)
-        : edge_(edge && edge->lines > 0 ? edge : nullptr), least_(settings.coverage ? settings.coverage->minCoverage : 0.f),
+        : edge_(edge && edge->lines > 0 ? edge : nullptr), least_(settings.minCoverage),
           samples_(samples), ray_(ray), h2_(ray.radius * ray.radius), begin_(ray.kernelBegin(settings.receiverWindow)),
           end_(ray.kernelEnd(settings.receiverWindow)),
           kernelScale_(3.f / (kPi * h2_)), visibility_(settings.visibility), batches_(settings.batches), layer_(layer),
@@ -481,7 +481,9 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                 splat.finish();
                 continue;
             }
-            PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread]);
+            // A stored photon's coverage is measured already, its edges kept beside it.
+            const KernelEdge* edge = photons.edges.empty() ? nullptr : &photons.edges[order[size_t(p)]];
+            PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], edge);
             traverseCylinder(tree, samples, cylinder, scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },

@@ -61,8 +61,11 @@ void PassTargets::gather(const std::vector<std::vector<int64_t>*>& slots, const 
 void PassTargets::splatPortion(const PhotonMap& photons, size_t begin, size_t end, const SplatSettings& settings,
                                FixedFilm& part, std::vector<int64_t>& slots, SplatStats* stats, CoverageStats* coverage) const {
     PhotonMap indirect, others;
-    for (size_t i = begin; i < end; ++i)
-        (sparse_ && photons.rays[i].cls == kPhotonIndirect ? indirect : others).rays.push_back(photons.rays[i]);
+    for (size_t i = begin; i < end; ++i) {
+        PhotonMap& to = sparse_ && photons.rays[i].cls == kPhotonIndirect ? indirect : others;
+        to.rays.push_back(photons.rays[i]);
+        if (!photons.edges.empty()) to.edges.push_back(photons.edges[i]);
+    }
     if (!others.rays.empty()) splatPhotons(accel_, tree_, samples_, others, settings, part, pool_, reporter_, stats, coverage);
     if (indirect.rays.empty()) return;
     SplatSettings sparse = settings;
