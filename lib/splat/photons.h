@@ -12,7 +12,7 @@
 
 #include "core/math.h"
 #include "core/sampling.h"
-#include "splat/coverage.h"
+#include "splat/kernel_edge.h"
 
 namespace rs {
 
