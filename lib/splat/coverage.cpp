@@ -118,8 +118,8 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
 //    a = n_h / (n_h·ω) − n_o / (n_o·ω), which cuts the disc where |a⊥|·h > length.
 //  • The probes that miss on rule 1's arriving side (past a convex edge, a hole, a window's end):
 //    a line across the direction from their mean to the mean of those that arrive, where it
-//    leaves their share (the coverage less rule 1's cut) on the arriving side, kept only where
-//    it parts them; else the flux is divided by that share, as without lines.
+//    leaves the share of rule 1's side that arrives on its own arriving side, kept only where it
+//    parts them; else the flux is divided by that share, as without lines.
 float kernelEdges(const RayAccel& accel, const PhotonRay& ray, const ProbeRecord& record, int probes, float coverage,
                   KernelEdge& edge) {
     edge.lines = 0;
