@@ -209,7 +209,7 @@ public:
     }
 
 private:
-    // With kernel edges (coverage.h's KernelEdge): 1 / the share of the sample's own kernel on
+    // With kernel edges (kernel_edge.h): 1 / the share of the sample's own kernel on
     // their arriving side, given its e_k·(y − x(i−1)), at most 1 / minCoverage.
     float edgeFactor(const float across[2]) const {
         return 1.f / std::max(edge_->shareAt(across), std::max(least_, 1e-3f));

@@ -186,7 +186,7 @@ struct SplatSettings {
     // has reached an eye sample that may receive it, and not for the photons whose kernels land
     // where the camera sees nothing (half of them on the staircase interior).
     const CoverageSettings* coverage = nullptr;
-    // The least share of a kernel a sample's light is divided by, with kernel edges (coverage.h).
+    // The least share of a kernel a sample's light is divided by, with kernel edges (kernel_edge.h).
     float minCoverage = CoverageSettings{}.minCoverage;
     static constexpr int64_t kChunk = 256;
 };
