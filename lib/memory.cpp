@@ -41,17 +41,22 @@ constexpr double kBaseBytes = 128.0 * 1024 * 1024;
 }  // namespace
 
 std::string MemoryEstimate::describe() const {
-    char buf[256];
+    char buf[320];
     std::snprintf(buf, sizeof buf,
                   "%.2f GiB (grid %.2f, tree %.2f, eye samples %.2f, photons %.2f, film %.2f, splat buffers %.2f, "
-                  "BVH %.2f, base %.2f)",
+                  "BVH %.2f, base %.2f",
                   total() / kGiB, grid / kGiB, tree / kGiB, eye / kGiB, photons / kGiB, film / kGiB, splat / kGiB,
                   bvh / kGiB, base / kGiB);
-    return buf;
+    std::string out = buf;
+    if (store > 0.0) {
+        std::snprintf(buf, sizeof buf, ", the walkthrough's photons %.2f", store / kGiB);
+        out += buf;
+    }
+    return out + ")";
 }
 
 MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t triangles, int width, int height,
-                              int threads) {
+                              int threads, bool keepsPhotons) {
     MemoryEstimate m;
     m.base = kBaseBytes;
     const double pixels = double(width) * double(height);
@@ -73,6 +78,12 @@ MemoryEstimate estimateMemory(const RenderConfig& cfg, const int dims[3], size_t
         m.photons = double(cfg.photons) * sizeof(PhotonRay) * 1.5;  // the map grows by doubling
         const int classes = (cfg.directBySampling() ? 0 : 1) + (cfg.sparseReceivers() ? 0 : 1) + 1;  // + caustic
         m.splat = pixels * kSplatBytesPerPixelThreadClass * classes * std::max(threads, 1);
+        if (keepsPhotons) {
+            // Every round of every pass (under a time limit, as many as a render without one),
+            // each photon's ray and, corrected at the samples, its kernel's edges.
+            const double perPhoton = sizeof(PhotonRay) + (cfg.coverageAtSamples ? sizeof(KernelEdge) : 0);
+            m.store = double(cfg.photons) * cfg.renderPassCount() * std::max(cfg.photonRounds, 1) * perPhoton;
+        }
     }
     return m;
 }

@@ -14,15 +14,17 @@ namespace rs {
 
 struct MemoryEstimate {
     double grid = 0, tree = 0, eye = 0, photons = 0, film = 0, splat = 0, bvh = 0, base = 0;  // bytes
-    double total() const { return grid + tree + eye + photons + film + splat + bvh + base; }
+    double store = 0;  // a walkthrough's photons of every pass, kept across its frames
+    double total() const { return grid + tree + eye + photons + film + splat + bvh + base + store; }
     std::string describe() const;  // "2.1 GiB (grid 1.6, eye samples 0.2, …)"
 };
 
 // For a render of `triangles` triangles at width × height on `threads` threads; the grid is
 // the one `cfg.grid` gives over the scene's bounds (dims) and exists only when the render
-// needs it (splat methods, or --vdb / --cache with the path tracer).
+// needs it (splat methods, or --vdb / --cache with the path tracer). `keepsPhotons`: a
+// walkthrough that keeps every pass's photons for its frames (PhotonStore).
 MemoryEstimate estimateMemory(const RenderConfig& cfg, const int gridDims[3], size_t triangles, int width, int height,
-                              int threads);
+                              int threads, bool keepsPhotons = false);
 
 // The memory this process may still use: the smaller of MemAvailable (/proc/meminfo) and
 // what its cgroup allows; 0 when neither can be read.

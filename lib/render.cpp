@@ -199,7 +199,7 @@ struct PreparedScene::Parts {
     std::unique_ptr<LightSampler> lights;
 };
 
-PreparedScene::PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks)
+PreparedScene::PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, bool keepsPhotons)
     : parts_(new Parts{scene, cfg, reporter, ranks}) {
     cfg.validate();
     Parts& p = *parts_;
@@ -212,7 +212,7 @@ PreparedScene::PreparedScene(const Scene& scene, const RenderConfig& cfg, Report
                                       : GridGeometry();
     const int gridDims[3] = {geometry.dims.x, geometry.dims.y, geometry.dims.z};
     const int threads = cfg.threads > 0 ? cfg.threads : ThreadPool::hardwareThreads();
-    const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), p.width, p.height, threads);
+    const MemoryEstimate memory = estimateMemory(cfg, gridDims, scene.triangleCount(), p.width, p.height, threads, keepsPhotons);
     checkMemory(memory, cfg.maxMemory, ranks.sizeOnThisMachine());
     stats.setCount("memory_estimate_mb", memory.total() / kMB);
     agreeOrStop(ranks, false);  // every rank got this far: the scene loaded and fits

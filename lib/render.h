@@ -36,7 +36,8 @@ RenderResult render(const Scene& scene, const RenderConfig& cfg, Reporter& repor
 // outlive it; every view must have the aspect of cfg's camera (the image size is fixed here).
 class PreparedScene {
 public:
-    PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks);
+    // `keepsPhotons`: a walkthrough's, whose photons are kept for its frames (memory.h).
+    PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, bool keepsPhotons = false);
     ~PreparedScene();
     // The image through `camera`: the same bits as render() with the scene's camera there (and
     // the same store).

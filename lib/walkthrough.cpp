@@ -70,6 +70,9 @@ Walkthrough::Walkthrough(const RenderConfig& cfg, Reporter& reporter, Ranks& ran
     // are then traced once a rank, not once a frame's share.
     wholeFrames_ = ranks.size() > 1 && cfg.frameCount() >= ranks.size();
     if (wholeFrames_) alone_ = std::make_unique<AloneOnSharedMachine>(ranks.sizeOnThisMachine());
+    // The scene as read serves every frame: prepared now, so that a range whose kept photons do
+    // not fit is refused before its first frame.
+    if (camerasOnly_) prepared_ = std::make_unique<PreparedScene>(rest, cfg_, reporter_, frameRanks(), store_ != nullptr);
 
     // What the range shows that the user may not expect: warnings, once.
     if (!animation.unsupported.empty())
@@ -103,7 +106,6 @@ RenderResult Walkthrough::renderFrame(int frame) {
     RenderResult result;
     if (camerasOnly_) {
         // The scene as read and the photons of the frames before: only the camera is posed.
-        if (!prepared_) prepared_ = std::make_unique<PreparedScene>(file_->scene(), cfg_, reporter_, frameRanks());
         result = prepared_->render(posedCamera(file_->scene(), cameraIndex_, cfg_.camera, pose), store_.get());
     } else {
         // Meshes or lights move: the nodes flattened at the frame's pose from the file as read,

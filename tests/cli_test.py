@@ -356,6 +356,11 @@ def bad_frames_tests(tmp):
         case("--frame-step 0", ["--frames", "1-4", "--frame-step", "0"], "--frame-step 0", "out of range"),
         case("--frame-step without --frames", ["--frame-step", "2"], "--frame-step", "--frames"),
         case("-o pattern in a missing directory", ["--frames", "1-2"], missing, exr=missing),
+        # The walkthrough keeps every pass's photons: 64 passes of a million need some 6 GiB,
+        # where a still of the same settings needs 0.3.
+        case("--frames keeping 64 passes of 1M photons",
+             ["--frames", "1-2", "--photons", "1M", "--passes", "64", "--max-memory", "2G"],
+             "needs about", "the walkthrough's photons", "--max-memory"),
     ]
 
 
