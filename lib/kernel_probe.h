@@ -1,0 +1,70 @@
+// The first pass's probe of the indirect kernels' scale (splat/kernel_scale.h, docs/design.md
+// §7), run by splat_pass.cpp: a share of the pass's indirect photons splatted in halves at scales
+// 1 and ½, from which rank 0 chooses the scale m of the passes.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/stats.h"
+#include "output/film.h"
+#include "render_context.h"
+#include "splat/eye.h"
+#include "splat/kernel_scale.h"
+#include "splat/photons.h"
+#include "splat/splat.h"
+#include "splat_pass.h"
+
+namespace rs {
+
+class PassTargets;
+
+// Under a time limit a pass is started when its steps before the splat and this share of its
+// splat fit: a pass cut short still adds a whole direct film, and its photons count by their
+// share (FixedFilm::photonPasses).
+constexpr double kWorthStarting = 0.1;
+
+// A share (half) of the first pass's indirect photons splatted in halves at scales 1 and ½.
+// Each rank splats its share of each; the halves are summed at rank 0, which chooses the scale m
+// and tells the others. The pass's own indirect light is then the share's, at whichever of 1 and
+// ½ is nearer m, and the rest's at m (until the deadline, where there is one).
+class KernelScaleProbeStep {
+public:
+    KernelScaleProbeStep(const RenderContext& c, const PassTargets& targets, const EyePass& eye, const SplatSettings& splat,
+                         SplatTotals& totals)
+        : c_(c), targets_(targets), eye_(eye), splat_(splat), totals_(totals), values_(size_t(c.width) * c.height * 3) {}
+
+    // `indirect`: the pass's indirect photons before their coverage; `other`: seconds of the
+    // pass apart from their splat; `whole`: runs since the passes began. Adds their light to
+    // `sum` and returns the scale chosen; `covered`: the paths whose indirect photons it splatted.
+    float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
+              const std::function<bool()>& timeUp, uint64_t& covered);
+    // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
+    // and a kWorthStarting share of its splat at the scale chosen).
+    double nextSeconds() const { return nextSeconds_; }
+    // With a time limit where the photon rounds are chosen, at rank 0: the noises, a round's
+    // splat and the seconds left (its eye pass and photon tracing are the caller's).
+    const PhotonRoundsPlan& roundsPlan() const { return rounds_; }
+
+    // Ray `index` of the first pass's photons (path order, before coverage) as that pass
+    // splatted it under the probe, the scale m chosen: in its part (the other classes, the
+    // probed share of the indirect ones or the rest), at that part's scale.
+    static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
+                                const PhotonSettings& ps);
+
+private:
+    // At rank 0: the scale m of least expected error, from the four halves' indirect light.
+    double choose(const FixedFilm halves[4], const double seconds[2], double gather, const Timer& whole, double other);
+
+    const RenderContext& c_;
+    const PassTargets& targets_;
+    const EyePass& eye_;
+    const SplatSettings& splat_;
+    SplatTotals& totals_;
+    const size_t values_;
+    double nextSeconds_ = 0.0;
+    PhotonRoundsPlan rounds_;
+};
+
+}  // namespace rs
