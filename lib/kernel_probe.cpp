@@ -1,7 +1,10 @@
 #include "kernel_probe.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+
+#include "core/sampling.h"
 
 #include "splat/targets.h"
 
@@ -19,7 +22,17 @@ PhotonMap slice(const PhotonMap& photons, size_t first, size_t last) {
     return out;
 }
 
-// The scale at which the first pass keeps its probed share's light, for the scale m chosen.
+// The probe's halves of `photons`: its paths, each to one half by a hash of its number. Halves of
+// the path order would be two runs of the pass's Halton points, whose errors are not
+// independent, and S (kernel_scale.h) assumes they are.
+std::array<PhotonMap, 2> halvesOf(const PhotonMap& photons, uint64_t seed) {
+    std::array<PhotonMap, 2> halves{photons, photons};
+    for (PhotonMap& h : halves) h.rays.clear(), h.edges.clear();
+    for (const PhotonRay& ray : photons.rays) halves[hashKey(seed, Stage::Probe, ray.path) & 1u].rays.push_back(ray);
+    return halves;
+}
+
+// The scale at which the first pass keeps its probed photons' light, for the scale m chosen.
 float keptProbeScale(float m) { return m < std::sqrt(0.5f) ? 0.5f : 1.f; }
 
 // The photon rounds' noises (kernel_scale.h) from the first pass: the photons' V at the scale
@@ -36,56 +49,87 @@ PhotonRoundsPlan roundsNoise(const EyePass& eye, const std::vector<float>& light
 
 }  // namespace
 
-float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole,
-                                double other, const std::function<bool()>& timeUp, uint64_t& covered) {
-    const size_t share = indirect.rays.size() / KernelScaleProbe::kShare;
-    FixedFilm parts[4];  // A, B, C, D: their indirect layer only
+void KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps,
+                                      FixedFilm parts[4], std::vector<int64_t> mine[2], double seconds[2], double& gather) {
     std::vector<int64_t> slots[4];
-    double seconds[2];  // the share's splat at 1 and at ½, before the gathers
     for (int f = 0; f < 2; ++f) {
         Timer t;
-        const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, 0, share), kPhotonIndirect, f ? 0.5f : 1.f, ps);
+        const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, first, last), kPhotonIndirect, f ? 0.5f : 1.f, ps);
+        const std::array<PhotonMap, 2> halves = halvesOf(scaled, c_.cfg.seed);
         for (int h = 0; h < 2; ++h) {
             FixedFilm& part = parts[2 * f + h];
             part.width = c_.width, part.height = c_.height;
             part.buffers[kIndirect].assign(values_, 0);
-            targets_.land(slice(scaled, h ? share / 2 : 0, h ? scaled.rays.size() : share / 2), splat_, part,
-                          slots[2 * f + h], f == 0 ? &totals_.splat : nullptr, f == 0 ? &totals_.coverage : nullptr);
+            targets_.land(halves[h], splat_, part, slots[2 * f + h], f == 0 ? &totals_.splat : nullptr, f == 0 ? &totals_.coverage : nullptr);
         }
         seconds[f] = t.seconds();
     }
     // The receivers searched once for B, C and D; A's gather alone is timed as a pass's.
     Timer gathering;
     targets_.gather({&slots[0]}, {&parts[0]}, splat_);
-    const double gather = gathering.seconds();
+    gather = gathering.seconds();
     targets_.gather({&slots[1], &slots[2], &slots[3]}, {&parts[1], &parts[2], &parts[3]}, splat_);
-    std::vector<int64_t> mine[2];  // this rank's light of the share at 1 and at ½
     for (int j = 0; j < 4; ++j) {
         std::vector<int64_t>& light = parts[j].buffers[kIndirect];
         mine[j / 2].resize(values_);
         for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
         c_.ranks.sumAtRoot(light);
     }
-    double scale = c_.ranks.rank() == 0 ? choose(parts, seconds, gather, whole, other) : 1.0;
-    c_.ranks.broadcast(&scale, 1);
-    const float m = float(scale);
-    for (int j = 0; j < 4; ++j) {  // the halves are done with: freed before the rest is splatted
-        parts[j] = FixedFilm();
-        slots[j] = std::vector<int64_t>();
+}
+
+float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole,
+                                double other, const std::function<bool()>& timeUp, uint64_t& covered) {
+    const size_t n = indirect.rays.size(), share = n / KernelScaleProbe::kShare;
+    FixedFilm parts[4];            // A, B, C, D: their indirect layer only
+    std::vector<int64_t> mine[2];  // this rank's light of the probed photons at 1 and at ½
+    double seconds[2], gather = 0.0;  // the share's splats at 1 and at ½, before the gathers; a gather
+    landHalves(indirect, 0, share, ps, parts, mine, seconds, gather);
+    std::vector<float> light;
+    KernelScaleProbe probe;
+    // Rank 0 says whether the rest is probed too (−1), or the scale chosen. Past the deadline it
+    // chooses from the share (every rank asks timeUp, which may agree across ranks).
+    const bool late = timeUp && timeUp();
+    double scale = 1.0;
+    if (c_.ranks.rank() == 0) {
+        probe = measure(parts, KernelScaleProbe::kShare, light);
+        scale = !late && probeWidens(probe) ? -1.0 : choose(probe, light, seconds, gather, whole, other);
     }
-    std::vector<int64_t>& light = sum.buffers[kIndirect];
+    c_.ranks.broadcast(&scale, 1);
+    widened_ = scale < 0.0;
+    if (widened_) {
+        FixedFilm rest[4];
+        double unusedSeconds[2], unusedGather = 0.0;
+        landHalves(indirect, share, n, ps, rest, mine, unusedSeconds, unusedGather);
+        if (c_.ranks.rank() == 0) {
+            for (int j = 0; j < 4; ++j) {
+                std::vector<int64_t>& to = parts[j].buffers[kIndirect];
+                const std::vector<int64_t>& from = rest[j].buffers[kIndirect];
+                for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(to[i], from[i]);
+            }
+            probe = measure(parts, 1, light);
+            scale = choose(probe, light, seconds, gather, whole, other);
+        }
+        c_.ranks.broadcast(&scale, 1);
+    }
+    const float m = float(scale);
+    for (FixedFilm& part : parts) part = FixedFilm();  // the halves are done with: freed before the rest is splatted
+    std::vector<int64_t>& pass = sum.buffers[kIndirect];
     const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
-    for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], kept[i]);
+    for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(pass[i], kept[i]);
+    if (widened_) {
+        covered = UINT64_MAX;  // every path's indirect photons
+        return m;
+    }
     FixedFilm part;  // the splat's layers only
     part.width = c_.width, part.height = c_.height;
     for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
-    covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, share, indirect.rays.size()), kPhotonIndirect, m, ps),
-                             splat_, part, &totals_.splat, &totals_.coverage, timeUp);
+    covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, share, n), kPhotonIndirect, m, ps), splat_, part,
+                             &totals_.splat, &totals_.coverage, timeUp);
     sum.add(part);
     return m;
 }
 
-PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
+PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m, bool widened,
                                            const PhotonSettings& ps) {
     PhotonMap part = traced;
     part.rays.clear();
@@ -97,7 +141,7 @@ PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonM
         part.rays.push_back(traced.rays[i]);
     }
     if (indirect) {
-        const size_t share = part.rays.size() / KernelScaleProbe::kShare;
+        const size_t share = widened ? part.rays.size() : part.rays.size() / KernelScaleProbe::kShare;
         const bool probed = at < share;
         part = scaledKernels(c.scene, probed ? slice(part, 0, share) : slice(part, share, part.rays.size()),
                              kPhotonIndirect, probed ? keptProbeScale(m) : m, ps);
@@ -106,18 +150,20 @@ PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonM
     return part.rays[at];
 }
 
-double KernelScaleProbeStep::choose(const FixedFilm halves[4], const double seconds[2], double gather, const Timer& whole,
-                                    double other) {
+KernelScaleProbe KernelScaleProbeStep::measure(const FixedFilm halves[4], int share, std::vector<float>& light) const {
     const int64_t *A = halves[0].buffers[kIndirect].data(), *B = halves[1].buffers[kIndirect].data(),
                   *C = halves[2].buffers[kIndirect].data(), *D = halves[3].buffers[kIndirect].data();
-    std::vector<float> light(values_);
+    light.assign(values_, 0.f);
     for (size_t i = 0; i < values_; ++i) {
         const int ch = int(i % 3);
         light[i] = eye_.film.layers[kEmission][i / 3][ch] + eye_.film.layers[kDirect][i / 3][ch] +
-                   float(double(A[i] + B[i]) * KernelScaleProbe::kShare / FixedFilm::kScale);
+                   float(double(A[i] + B[i]) * share / FixedFilm::kScale);
     }
-    const KernelScaleProbe probe =
-        probeKernelScale(A, B, C, D, light, eye_.film.width, FixedFilm::kScale);
+    return probeKernelScale(A, B, C, D, light, eye_.film.width, FixedFilm::kScale, share);
+}
+
+double KernelScaleProbeStep::choose(const KernelScaleProbe& probe, const std::vector<float>& light, const double seconds[2],
+                                    double gather, const Timer& whole, double other) {
     KernelScalePlan plan;
     plan.passes = c_.cfg.renderPassCount();
     plan.alpha = c_.cfg.alpha;
@@ -125,6 +171,7 @@ double KernelScaleProbeStep::choose(const FixedFilm halves[4], const double seco
         plan.timed = true;
         plan.secondsLeft = c_.cfg.timeLimit - whole.seconds();
         plan.passOther = other;
+        plan.restShare = widened_ ? 0.0 : 1.0 - 1.0 / KernelScaleProbe::kShare;
         // a + b·h² for the share, from its two splats (b: the part that grows with the
         // kernel's area), then for all the indirect photons, and a pass's one gather.
         const double b = std::max(0.0, seconds[0] - seconds[1]) * 4.0 / 3.0, a = std::max(0.0, seconds[0] - b);
@@ -144,7 +191,8 @@ double KernelScaleProbeStep::choose(const FixedFilm halves[4], const double seco
     c_.stats.setCount("kernel_probe_noise", probe.noise);
     c_.stats.setCount("kernel_probe_finer_noise", probe.finerNoise);
     c_.stats.setCount("kernel_probe_bias", probe.bias());
-    c_.stats.setCount("kernel_probe_bias_significance", probe.biasChangeSpread > 0.0 ? probe.biasChange / probe.biasChangeSpread : 0.0);
+    c_.stats.setCount("kernel_probe_bias_significance", probe.significance());
+    c_.stats.setCount("kernel_probe_widened", widened_ ? 1 : 0);
     return scale;
 }
 

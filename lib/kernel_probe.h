@@ -25,10 +25,12 @@ class PassTargets;
 // share (FixedFilm::photonPasses).
 constexpr double kWorthStarting = 0.1;
 
-// A share (half) of the first pass's indirect photons splatted in halves at scales 1 and ½.
-// Each rank splats its share of each; the halves are summed at rank 0, which chooses the scale m
-// and tells the others. The pass's own indirect light is then the share's, at whichever of 1 and
-// ½ is nearer m, and the rest's at m (until the deadline, where there is one).
+// Half of the pass's indirect photons (KernelScaleProbe::kShare) are splatted in halves A, B at
+// scale 1 and C, D at ½ (their paths split by a hash). Where the blur they measure is not clear
+// (probeWidens), the rest are splatted so too and the choice is made from all of them. Each rank
+// splats its share of each; the halves are summed at rank 0, which chooses the scale m and tells
+// the others. The pass's own indirect light is then the probed photons' at whichever of 1 and ½
+// is nearer m, and the rest's at m (until the deadline, where there is one).
 class KernelScaleProbeStep {
 public:
     KernelScaleProbeStep(const RenderContext& c, const PassTargets& targets, const EyePass& eye, const SplatSettings& splat,
@@ -40,6 +42,8 @@ public:
     // `sum` and returns the scale chosen; `covered`: the paths whose indirect photons it splatted.
     float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
               const std::function<bool()>& timeUp, uint64_t& covered);
+    // Whether the probe took all of the pass's indirect photons (probeWidens).
+    bool widened() const { return widened_; }
     // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
     // and a kWorthStarting share of its splat at the scale chosen).
     double nextSeconds() const { return nextSeconds_; }
@@ -48,14 +52,22 @@ public:
     const PhotonRoundsPlan& roundsPlan() const { return rounds_; }
 
     // Ray `index` of the first pass's photons (path order, before coverage) as that pass
-    // splatted it under the probe, the scale m chosen: in its part (the other classes, the
-    // probed share of the indirect ones or the rest), at that part's scale.
-    static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m,
+    // splatted it under the probe, the scale m chosen (`widened` as the probe was): in its part
+    // (the other classes, the probed photons or the rest), at that part's scale.
+    static PhotonRay asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m, bool widened,
                                 const PhotonSettings& ps);
 
 private:
-    // At rank 0: the scale m of least expected error, from the four halves' indirect light.
-    double choose(const FixedFilm halves[4], const double seconds[2], double gather, const Timer& whole, double other);
+    // The halves of photons [first, last) of `indirect` at scales 1 and ½ into `parts` (A, B, C,
+    // D), this rank's light at each scale added to `mine`; the seconds of the splats at 1 and ½
+    // and of A's gather.
+    void landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps, FixedFilm parts[4],
+                    std::vector<int64_t> mine[2], double seconds[2], double& gather);
+    // At rank 0: the probe from the summed halves, `share` the pass's indirect photons over theirs.
+    KernelScaleProbe measure(const FixedFilm halves[4], int share, std::vector<float>& light) const;
+    // At rank 0: the scale m of least expected error.
+    double choose(const KernelScaleProbe& probe, const std::vector<float>& light, const double seconds[2], double gather,
+                  const Timer& whole, double other);
 
     const RenderContext& c_;
     const PassTargets& targets_;
@@ -63,6 +75,7 @@ private:
     const SplatSettings& splat_;
     SplatTotals& totals_;
     const size_t values_;
+    bool widened_ = false;
     double nextSeconds_ = 0.0;
     PhotonRoundsPlan rounds_;
 };

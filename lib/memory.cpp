@@ -24,10 +24,10 @@ constexpr double kBytesPerEyeSample = 2 * double(EyeSamples::kBytesPerSample + s
 // Per pixel: the passes' fixed-point sum (six RGB buffers of 8-byte integers: layers, albedo,
 // normal), a pass's float film, and one buffer's copy for a distributed render's reduction.
 constexpr double kFilmBytesPerPixel = 6 * 3 * 8 + 6 * 12 + 3 * 8;
-// Per pixel, in the first pass where it measures the kernel scale (render.cpp's
-// KernelScaleProbeStep): four half-images and the two kept (RGB, 8 bytes) and a splat's film
-// of three layers.
-constexpr double kProbeBytesPerPixel = (4 + 2 + 3) * 3 * 8;
+// Per pixel, in the first pass where it measures the kernel scale (kernel_probe.h): four
+// half-images, four more where the probe widens to the rest of the pass's photons, and the two
+// kept (RGB, 8 bytes; a splat's film of three layers instead of the four more).
+constexpr double kProbeBytesPerPixel = (4 + 4 + 2) * 3 * 8;
 // Per pixel, thread and photon class splatted onto the eye samples: the splat's fixed-point
 // accumulators (RGB × 8 bytes). With sparse receivers the indirect photons land on the receivers
 // instead (irradiance.h), whose buffers are a small fraction of these.

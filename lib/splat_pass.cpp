@@ -293,6 +293,7 @@ double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassT
         KernelScaleProbeStep step(c_, targets, eye, splat_, totals_);
         const double photonsBefore = whole_.seconds() - photonsBegan_;  // traced, the other classes splatted
         const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), timeUp, coveredIndirect);
+        probeWidened_ = step.widened();
         nextPass_ = step.nextSeconds();
         if (c_.cfg.photonRoundsAuto()) rounds_ = chooseRounds(step.roundsPlan(), photonsBefore);
         photons_.classScale[kPhotonIndirect] = m;
@@ -324,7 +325,8 @@ void SplatPasses::replayRay(PhotonMap& photons, const PhotonSettings& passSettin
     const PhotonRay traced = replayedRay(c_, photons);
     const PhotonRay ray = probing_ && c_.cfg.replayPass == 0
                               ? KernelScaleProbeStep::asSplatted(c_, photons, size_t(c_.cfg.replayIndex),
-                                                                 photons_.classScale[kPhotonIndirect], passSettings)
+                                                                 photons_.classScale[kPhotonIndirect], probeWidened_,
+                                                                 passSettings)
                               : traced;
     photons.rays.assign(1, ray);
     PhotonRay covered = ray;  // as the splat will cover it

@@ -101,6 +101,7 @@ private:
     bool replaying_ = false;
     int traced_ = 0;  // rounds (passes) whose photons this render traced (stats: photon_passes_traced)
     double nextPass_ = 0.0;  // the probe's estimate of a later pass's seconds
+    bool probeWidened_ = false;  // the first pass probed all its indirect photons (kernel_probe.h)
     int rounds_ = 1;         // the photon rounds of the passes after the first, where it chooses them
     double eyeAndTrees_ = 0.0, photonsBegan_ = 0.0;  // the first pass's: seconds, and whole_'s at its photons
     double eyeSeconds_ = 0.0;

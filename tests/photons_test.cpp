@@ -233,35 +233,54 @@ TEST(KernelScale, ChoiceIsTheLeastExpectedError) {
     EXPECT_LT(chooseKernelScale(p, timed), chooseKernelScale(p, eight));
 }
 
-// The blur must stand out of its own noise. The same halves' difference spread over the image
-// (blur at every edge) is kept; put in one of the kBlocks² blocks of the image (a few bright
-// photons in one half) it is refused, though S and the promised gain are the same.
+// S's spread is that of S where nothing is blurred. Four halves of independent noise and no
+// blur: S / spread scatters as a unit normal over images. A blur both halves share stands out
+// of it; the same S made by a few bright photons in one half does not.
 TEST(KernelScale, KeepsOnlyABlurAboveItsSpread) {
-    const int width = 256, height = 256, n = width * height * 3;  // blocks of 16 × 16 pixels
+    const int width = 64, n = width * width * 3;  // blocks of 4 × 4 pixels
     const double fixed = 4294967296.0, k = KernelScaleProbe::kShare;
     auto at = [&](double v) { return int64_t(std::llround(v / 2 / k * fixed)); };  // a half of the share, as splatted
     const std::vector<float> light(n, 1.f);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> g(0.0, 0.05);
+    const int images = 400;
+    double sum = 0.0, sum2 = 0.0;
+    for (int image = 0; image < images; ++image) {
+        std::vector<int64_t> h[4];
+        for (auto& v : h)
+            for (int i = 0; i < n; ++i) v.push_back(at(1.0 + g(rng)));
+        const double z = probeKernelScale(h[0].data(), h[1].data(), h[2].data(), h[3].data(), light, width, fixed).significance();
+        sum += z, sum2 += z * z;
+    }
+    const double mean = sum / images, sd = std::sqrt(sum2 / images - mean * mean);
+    EXPECT_NEAR(mean, 0.0, 0.15);
+    EXPECT_NEAR(sd, 1.0, 0.12);
+
+    // No noise: in the corner block of 4 × 4 pixels, A and B brighter than C and D by δ each
+    // (a blur they share), or by 4δ and δ (bright photons in A): the same S = 4 Σ w x y.
     const std::vector<int64_t> flat(n, at(1.0));
-    // Spread: the first channel of every 8th pixel is 0.2 brighter at scale 1 than at ½, in every block.
-    std::vector<int64_t> a = flat;
-    for (int i = 0; i < n; i += 24) a[i] = at(1.2);
-    const KernelScaleProbe spread = probeKernelScale(a.data(), a.data(), flat.data(), flat.data(), light, width, fixed);
-    // One block: as much S, all of it in the 16 × 16 pixels at the corner (a term is w δ², w = 1/1.01).
-    const double delta = std::sqrt(spread.biasChange / (16 * 16 * 3) * 1.01);
-    std::vector<int64_t> a1 = flat;
-    for (int y = 0; y < 16; ++y)
-        for (int i = y * width * 3; i < (y * width + 16) * 3; ++i) a1[size_t(i)] = at(1.0 + delta);
-    const KernelScaleProbe block = probeKernelScale(a1.data(), a1.data(), flat.data(), flat.data(), light, width, fixed);
-    EXPECT_NEAR(block.biasChange / spread.biasChange, 1.0, 1e-3);
-    EXPECT_NEAR(spread.biasChange / spread.biasChangeSpread, double(KernelScaleProbe::kBlocks), 1e-3);
-    EXPECT_NEAR(block.biasChange / block.biasChangeSpread, 1.0, 1e-3);
-    KernelScaleProbe noisy = spread, lumpy = block;
-    noisy.noise = lumpy.noise = spread.biasChange;  // a noise that makes smaller kernels pay
-    noisy.finerNoise = lumpy.finerNoise = 4.0 * spread.biasChange;
+    auto corner = [&](double delta) {
+        std::vector<int64_t> v = flat;
+        for (int y = 0; y < 4; ++y)
+            for (int i = y * width * 3; i < (y * width + 4) * 3; ++i) v[size_t(i)] = at(1.0 + delta);
+        return v;
+    };
+    const std::vector<int64_t> shared = corner(0.02), bright = corner(0.04), faint = corner(0.01);
+    const KernelScaleProbe blur = probeKernelScale(shared.data(), shared.data(), flat.data(), flat.data(), light, width, fixed);
+    const KernelScaleProbe lump = probeKernelScale(bright.data(), faint.data(), flat.data(), flat.data(), light, width, fixed);
+    EXPECT_NEAR(lump.biasChange / blur.biasChange, 1.0, 1e-3);
+    EXPECT_GT(blur.significance(), 100.0);
+    EXPECT_NEAR(lump.significance(), 16.0 / 30.0, 1e-3);  // 4·4δ² over 2·(16 − 1)δ²
+    KernelScaleProbe noisy = blur, lumpy = lump;
+    noisy.noise = lumpy.noise = blur.biasChange;  // a noise that makes smaller kernels pay
+    noisy.finerNoise = lumpy.finerNoise = 4.0 * blur.biasChange;
     KernelScalePlan plan;
     plan.passes = 16;
     EXPECT_LT(chooseKernelScale(noisy, plan), 0.8f);
     EXPECT_EQ(chooseKernelScale(lumpy, plan), 1.f);
+    // Half of the first pass's photons decide only a clear blur; the rest are probed otherwise.
+    EXPECT_FALSE(probeWidens(noisy));
+    EXPECT_TRUE(probeWidens(lumpy));
 }
 
 // No bias measured: the kernels stay as they are. A bias measured small and a noise that falls

@@ -8,7 +8,7 @@
 
 namespace rs {
 
-enum class Stage : uint32_t { Camera = 1, Path = 2, Photon = 3, Eye = 4, Direct = 5, Coverage = 6, DirectFilm = 7, Test = 99 };
+enum class Stage : uint32_t { Camera = 1, Path = 2, Photon = 3, Eye = 4, Direct = 5, Coverage = 6, DirectFilm = 7, Probe = 8, Test = 99 };
 
 inline uint64_t mix64(uint64_t z) {  // splitmix64 finaliser
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;

@@ -17,25 +17,25 @@ float passRadiusScale(int p, float alpha) {
 }
 
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
-                                  const std::vector<float>& light, int width, double fixedScale) {
+                                  const std::vector<float>& light, int width, double fixedScale, int share) {
     KernelScaleProbe p;
     const size_t pixels = light.size() / 3, height = pixels / size_t(width);
     const int blocksX = KernelScaleProbe::kBlocks, blocksY = KernelScaleProbe::kBlocks;
-    std::vector<double> blockChange(size_t(blocksX) * blocksY, 0.0);  // S's terms summed a block
+    std::vector<double> blockNull(size_t(blocksX) * blocksY, 0.0);  // w (x² − y²) summed a block
     for (size_t i = 0; i < light.size(); ++i) {
         const double w = 1.0 / (double(light[i]) * light[i] + 0.01);
-        const double k = KernelScaleProbe::kShare / fixedScale;  // the flux × kShare
+        const double k = share / fixedScale;  // the flux × s
         const double A = double(a[i]) * k, B = double(b[i]) * k, C = double(c[i]) * k, D = double(d[i]) * k;
-        p.noise += w * (A - B) * (A - B) / KernelScaleProbe::kShare;
-        p.finerNoise += w * (C - D) * (C - D) / KernelScaleProbe::kShare;
-        const double change = A + B - C - D, noise = A - C - (B - D), term = w * (change * change - noise * noise);
-        p.biasChange += term;
-        const size_t pixel = i / 3, x = pixel % size_t(width), y = pixel / size_t(width);
-        const size_t row = std::min(size_t(blocksY - 1), y * blocksY / std::max<size_t>(height, 1));
-        blockChange[row * blocksX + x * blocksX / size_t(width)] += term;
+        p.noise += w * (A - B) * (A - B) / share;
+        p.finerNoise += w * (C - D) * (C - D) / share;
+        const double x = A - C, y = B - D;  // (x + y)² − (x − y)²
+        p.biasChange += w * 4.0 * x * y;
+        const size_t pixel = i / 3, column = pixel % size_t(width), line = pixel / size_t(width);
+        const size_t row = std::min(size_t(blocksY - 1), line * blocksY / std::max<size_t>(height, 1));
+        blockNull[row * blocksX + column * blocksX / size_t(width)] += w * (x * x - y * y);
     }
-    for (double t : blockChange) p.biasChangeSpread += t * t;
-    p.biasChangeSpread = std::sqrt(p.biasChangeSpread);
+    for (double t : blockNull) p.biasChangeSpread += t * t;
+    p.biasChangeSpread = 2.0 * std::sqrt(p.biasChangeSpread);
     return p;
 }
 
@@ -66,7 +66,7 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
         // The first pass still splats the rest of its indirect photons at m. Only whole
         // passes are begun; the pass time is known to some ±15 %, so the passes that fit are
         // averaged over that, lest the choice turn on whether one more just fits.
-        const double left = std::max(0.0, plan.secondsLeft - (1.0 - 1.0 / KernelScaleProbe::kShare) * splatSeconds(plan, m)), pass = passSeconds(plan, m);
+        const double left = std::max(0.0, plan.secondsLeft - plan.restShare * splatSeconds(plan, m)), pass = passSeconds(plan, m);
         double fit = 0.0;
         for (double f : {0.85, 1.0, 1.15}) fit += pass > 0.0 ? std::floor(left / (pass * f)) / 3.0 : 0.0;
         passes = 1.0 + plan.passesPerRound * fit;
@@ -87,7 +87,7 @@ double expectedKernelError(const KernelScaleProbe& probe, const KernelScalePlan&
 }
 
 float chooseKernelScale(const KernelScaleProbe& probe, const KernelScalePlan& plan) {
-    if (!(probe.biasChange > kBiasSignificance * probe.biasChangeSpread)) return 1.f;  // none, or none above its spread
+    if (!(probe.significance() > kBiasSignificance)) return 1.f;  // none, or none above its spread
     // 2^(−k/20), k = −kLargerSteps … 40: ¼ to kMaxKernelScale in steps of 3.5 %. Larger kernels
     // only where a blur was measured and extrapolates small: where none shows in the share's
     // noise (direct_light, one seed in two) it may still be there, and 1.46 gave 1.34 times the

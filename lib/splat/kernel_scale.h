@@ -2,12 +2,13 @@
 // trades bias (light blurred over its disc, growing with h) against noise (∝
 // 1/h², fewer photons under it), and which wins depends on the scene: contact shadows under a
 // point light want small kernels, a room's smooth interreflection large ones. So the first
-// pass measures both on half of its indirect photons (kShare): splatted at scale 1 in two
-// halves A and B (paths of the first and second half), and with kernels half as wide in halves
-// C and D, their flux × kShare. Per pixel and channel, weighted as relative MSE
-// (w = 1/(μ² + 0.01)), and for the pass's photons (the share's noise over kShare):
-//   noise of a pass at scale 1      V = Σ w (A − B)² / kShare
-//   noise at scale ½                V' = Σ w (C − D)² / kShare
+// pass measures both on half of its indirect photons (kShare; all of them where that half
+// leaves it unclear, probeWidens): splatted at scale 1 in two halves A and B (its paths split
+// by a hash), and with kernels half as wide in halves C and D, their flux × the
+// share s (the pass's photons over the probe's). Per pixel and channel, weighted as relative MSE
+// (w = 1/(μ² + 0.01)), and for the pass's photons (the probe's noise over s):
+//   noise of a pass at scale 1      V = Σ w (A − B)² / s
+//   noise at scale ½                V' = Σ w (C − D)² / s
 //   the bias's change from 1 to ½   S = Σ w ((A + B − C − D)² − (A − C − B + D)²)
 // The second square is the first's noise (the halves are independent), so S estimates
 // Σ w (b₁ − b_½)², and with bias ∝ h^e (e = kBiasOrder), b₁ − b_½ = (1 − 2^−e) b₁: Σ w b₁² =
@@ -42,18 +43,25 @@ struct KernelScaleProbe {
     double noise = 0.0;       // V
     double finerNoise = 0.0;  // V'
     double biasChange = 0.0;  // S
-    // S's spread: √Σ T², T the sum of S's terms over one of kBlocks × kBlocks blocks of the
-    // image (a kernel's light lands on neighbouring pixels together, so blocks, not pixels, are
-    // what is independent; a kernel covers as much of the image at any resolution).
+    // S's spread where nothing is blurred. S = 4 Σ w x y with x = A − C and y = B − D, the two
+    // halves' changes; with no blur x and y are independent noises of mean 0, and the spread of
+    // 4xy is twice that of x² − y², whose mean is 0 whatever the blur. So the spread is
+    // 2 √Σ T², T the sum of w (x² − y²) over one of kBlocks × kBlocks blocks of the image (a
+    // kernel's light lands on neighbouring pixels together, so blocks, not pixels, are what is
+    // independent; a kernel covers as much of the image at any resolution). A blur the halves
+    // share adds nothing to it; a few bright photons in one half (a glossy lobe's, a caustic's)
+    // add their square.
     double biasChangeSpread = 0.0;
     static constexpr int kBlocks = 16;
     double bias() const;  // Σ w b₁²
+    double significance() const { return biasChangeSpread > 0.0 ? biasChange / biasChangeSpread : biasChange > 0.0 ? 1e9 : 0.0; }
 };
 
 // From the four halves' indirect light as splatted (fixed point, pixel × rgb, rows of `width`
-// pixels) and the pass's light μ.
+// pixels), the pass's light μ and the share s: the pass's indirect photons over the probe's.
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
-                                  const std::vector<float>& light, int width, double fixedScale);
+                                  const std::vector<float>& light, int width, double fixedScale,
+                                  int share = KernelScaleProbe::kShare);
 
 struct KernelScalePlan {
     int passes = 1;            // P, with no time limit
@@ -65,6 +73,8 @@ struct KernelScalePlan {
     double splatFixed = 0.0, splatScaled = 0.0;
     int passesPerRound = 1;
     bool timed = false;
+    // The share of the first pass's indirect photons still to splat once the probe has chosen.
+    double restShare = 1.0 - 1.0 / KernelScaleProbe::kShare;
 };
 
 constexpr float kMinKernelScale = 0.25f;
@@ -79,10 +89,16 @@ constexpr float kMaxKernelScale = 1.4640857f;  // 2^(11/20)
 constexpr double kMinKernelGain = 1.5;
 // And only where the measured blur stands out of its own noise: S above kBiasSignificance times
 // its spread. Heavy-tailed light (a glossy lobe's or a caustic's rare bright photons) makes the
-// halves differ in a few blocks, which reads as blur: the glossy box's first pass measured S at
-// 1.9 spreads and, at 16 passes, shrank its kernels to 0.57 for 1.6 times the error of scale 1.
-// The point lights' blur stands 3.3–3.8 spreads out, direct_light's 2.4–2.9 (96 to 500 px).
+// halves differ in a few blocks, which reads as blur: the glossy box at 256 px, 16 passes,
+// measures 0.1–0.4 spreads (S with no blur the halves share).
 constexpr double kBiasSignificance = 2.0;
+// Where half of the first pass's photons do not measure a blur kBiasSignificance spreads out,
+// the rest are probed too and the scale is chosen from all of them (twice the photons: the
+// spread falls by half). Under direct_light's point light at 500 px half of them measured −0.5
+// to 2 spreads on five seeds of eight, all of them 2.3–5.7. It costs the rest's splat at ½:
+// under a 10 s limit the interior and the daylight room (whose blur is hidden in their noise)
+// come out about 1 % worse, the staircase under 20 s within noise.
+inline bool probeWidens(const KernelScaleProbe& p) { return !(p.significance() > kBiasSignificance); }
 
 // The kernel scale of pass p (0-based) from the shrinkage α: r²(n+1) = r²(n)·(n + α)/(n + 1).
 float passRadiusScale(int p, float alpha);
