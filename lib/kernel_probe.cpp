@@ -1,3 +1,5 @@
+// The first pass's probe of the indirect kernels' scale (kernel_probe.h): its halves, the
+// choice at rank 0, and where a replayed ray of that pass was splatted.
 #include "kernel_probe.h"
 
 #include <algorithm>

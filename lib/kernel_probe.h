@@ -14,7 +14,7 @@
 #include "splat/kernel_scale.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
-#include "splat_pass.h"
+#include "splat/totals.h"
 
 namespace rs {
 

@@ -17,6 +17,7 @@
 #include "splat/kernel_scale.h"
 #include "splat/photons.h"
 #include "splat/splat.h"
+#include "splat/totals.h"
 
 namespace rs {
 
@@ -36,14 +37,6 @@ struct PhotonStore {
         for (const auto& [pass, photons] : passes) b += double(photons.bytes());
         return b;
     }
-};
-
-// Figures summed over a render's passes (the last pass's sizes are reported as they come).
-struct SplatTotals {
-    SplatStats splat;
-    CoverageStats coverage;
-    int64_t photonsStored = 0;
-    double photonMb = 0.0;
 };
 
 class SplatPasses {
