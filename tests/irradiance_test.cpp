@@ -138,9 +138,9 @@ std::vector<double> blockMeans(const Film& f, int layer) {
 // The same photons on sparse receivers and on every eye sample: in the interior (a banister of
 // thin balusters, a table, shelves, corners everywhere) and the daylight room (a blind's thin
 // slats), at a size where the receivers are under 40 % of the eye samples, the indirect light's
-// mean agrees within 1 % (measured 0.9999 and 0.9997), its 8×8 blocks within 4 % of the light,
-// and pixel by pixel the relative MSE stays below what receivers standing for other surfaces
-// give.
+// mean agrees within 1 % (measured 0.9995 and 1.0005 at the default spacing ½), its 8×8 blocks
+// within 4 % of the light (0.5 %), and pixel by pixel the relative MSE stays well below what
+// receivers standing for other surfaces give: the smoothing of a receiver's spacing is in it too.
 TEST(SparseReceivers, KeepTheFullDensitySplatsLightOnThinPartsAndCorners) {
     const char* data = std::getenv("RAYSPLAT_DATA");
     if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
@@ -160,7 +160,7 @@ TEST(SparseReceivers, KeepTheFullDensitySplatsLightOnThinPartsAndCorners) {
         EXPECT_LT(diff / light, 0.04) << name;
         const double e = relativeMse(sparse.layers[kIndirect], full.layers[kIndirect]);
         RecordProperty(std::string(name) + "_relative_mse", std::to_string(e));
-        EXPECT_LT(e, 4e-4) << name << ": pixel by pixel (measured 1.9e-4 and 6.6e-5; 8.2e-4 and 8.4e-4 when a receiver "
-                                      "stands for samples on any surface within the spacing)";
+        EXPECT_LT(e, 1.2e-3) << name << ": pixel by pixel (measured 5.8e-4 and 2.6e-4; 2.6e-3 and 4.7e-3 when a "
+                                        "receiver stands for samples on any surface within the spacing)";
     }
 }
