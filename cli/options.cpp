@@ -208,7 +208,8 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
              [&](const std::string& v) { cfg.minCoverage = parseFloat("--min-coverage", v); }});
     cmd.add({"--receiver-spacing", "F",
              "with --visibility rays, indirect photons land on receivers F times the smallest indirect kernel radius "
-             "apart, and every eye sample takes the mean of those near it on its surface (default " +
+             "apart (over the root of the pass's photon rounds), and every eye sample takes the mean of those near it "
+             "on its surface (default " +
                  numberText(d.splat.receiverSpacing) + ", 0..4; 0: on every eye sample)",
              [&](const std::string& v) { cfg.receiverSpacing = parseFloat("--receiver-spacing", v); }});
     cmd.add({"--direct-spp", "N",

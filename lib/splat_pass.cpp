@@ -4,6 +4,7 @@
 #include "splat_pass.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "core/error.h"
@@ -161,12 +162,14 @@ double SplatPasses::renderFilm(int pass, FixedFilm& sum) {
 }
 
 // The indirect photons' receivers' spacing in pass `pass` (0: none): a share of the smallest
-// indirect kernel the pass can splat (the first pass probes with half-wide ones).
+// indirect kernel the pass can splat (the first pass probes with half-wide ones), over the root
+// of the pass's photon rounds: R rounds leave 1/R of one round's noise for the receivers'
+// smoothing to take out, and its blur stays (docs/design.md §8).
 float SplatPasses::receiverSpacing(int pass) const {
     if (!sparse_) return 0.f;
     const float scale = probing_ && pass == 0 ? 0.5f : photons_.classScale[kPhotonIndirect];
     return c_.cfg.receiverSpacing * photons_.minRadius[kPhotonIndirect] * grid_->geometry.voxelSize *
-           passRadiusScale(pass, c_.cfg.alpha) * scale;
+           passRadiusScale(pass, c_.cfg.alpha) * scale / std::sqrt(float(roundsOf(pass)));
 }
 
 // New photons (a fresh range of paths) with the pass's shrunk kernels; the probe's pass traces

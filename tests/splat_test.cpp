@@ -2,6 +2,7 @@
 // analytic irradiance, the reference path tracer, and energy conservation.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <set>
@@ -504,8 +505,12 @@ TEST(FilmPasses, AddTheDirectFilmOfWholePassesAndNoPhotons) {
 // a pass of R·M photons, whose kernels they take. Over two seeds, the indirect kernels of one
 // size whatever the photons: the eye pass's layers are one round's to the bit; the indirect
 // light has the mean of a pass of R·M photons and about its noise (the seeds' squared
-// difference), less than one round's (measured 0.77: the photons' part halves, the eye samples'
-// stays); the same to the bit whatever the thread count.
+// difference), less than one round's (measured 0.80: the photons' part halves, the eye samples'
+// stays); the same to the bit whatever the thread count. A pass of R rounds spaces its receivers
+// 1/√R as far apart (docs/design.md §8): here each render's receivers are given the spacing of
+// one round, and a pass of two rounds at the default spacing has more receivers (twice as many
+// on a large surface; measured 1.51 here, where the 16-pixel tiles and the small surfaces of a
+// 48-pixel image keep receivers of their own).
 TEST(PhotonRounds, AreAPassOfTheirPhotonsTogether) {
     const char* data = std::getenv("RAYSPLAT_DATA");
     if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
@@ -514,9 +519,11 @@ TEST(PhotonRounds, AreAPassOfTheirPhotonsTogether) {
     cfg.height = 0;
     cfg.kernelScale = 1.f;
     cfg.minRadius[kPhotonIndirect] = cfg.maxRadius[kPhotonIndirect] = 8.f;
+    const float spacing = cfg.receiverSpacing;
     auto seeds = [&](int64_t photons, int rounds) {
         cfg.photons = photons;
         cfg.photonRounds = rounds;
+        cfg.receiverSpacing = spacing * std::sqrt(float(rounds));
         std::vector<RenderResult> r;
         for (uint64_t seed : {1, 2}) {
             cfg.seed = seed;
@@ -546,8 +553,16 @@ TEST(PhotonRounds, AreAPassOfTheirPhotonsTogether) {
     EXPECT_LT(ofOne, 0.85) << "a round's photons the same as the first's would give 1";
     EXPECT_GT(ofTogether, 0.7);
     EXPECT_LT(ofTogether, 1.4);
+    const double receivers = one[0].stats.count("receivers");
+    EXPECT_NEAR(two[0].stats.count("receivers") / receivers, 1.0, 0.02) << "one round's spacing";
     cfg.photonRounds = 2;
     cfg.photons = 20000;
+    cfg.receiverSpacing = spacing;
+    cfg.seed = 1;
+    const double closer = render(scene, cfg, silentReporter()).stats.count("receivers") / receivers;
+    RecordProperty("receivers_of_two_rounds", std::to_string(closer));
+    EXPECT_GT(closer, 1.3) << "two rounds' receivers 1/√2 as far apart";
+    EXPECT_LT(closer, 2.4);
     expectSamePixelsWhateverTheThreadCount(scene, cfg);
 }
 

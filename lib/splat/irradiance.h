@@ -17,10 +17,11 @@
 // within `spacing`, a thin part or a surface seen at a grazing angle keeps as many receivers
 // as it needs, and a wall far from the camera few. With the same photons, the staircase
 // interior's indirect light at spacing ¼ is 0.997 of the full-density splat's (½: 0.997, 1: 0.994).
-// The spacing is ½ of the smallest radius: against path-traced references every scene in data/
-// has the same or less error than at ¼ in the same passes (the receivers' smoothing takes out
-// some of the photons' noise) and renders in 5–18 % less time; at ¾ and 1 the point lights'
-// error grows again (docs/performance.md).
+// The spacing is ½ of the smallest radius in a pass of one photon round, ½/√R in a pass of R
+// (splat_pass.cpp): against path-traced references every scene in data/ has the same or less
+// error than at ¼ in the same passes (the receivers' smoothing takes out some of the photons'
+// noise) and renders in 5–18 % less time; at ¾ and 1 the point lights' error grows again, and
+// with six rounds ½ has 8 % more error than ¼ (docs/performance.md).
 //
 // Takes:   the eye pass's samples in pixel order (before the tree reorders them), the spacing.
 // Returns: the receivers as EyeSamples whose `pixel` is their slot in a film of slots() values,
