@@ -51,7 +51,7 @@ struct IrradianceSettings {
 };
 
 struct IrradianceReceivers {
-    float spacing = 0.5f;  // metres
+    float spacing = 0.f;  // metres
     EyeSamples samples;   // the receivers, for the tree and the splat: `pixel` is the slot
     // Slots [0, irradianceSlots) gather irradiance (bsdf word: white 1); the others are glossy
     // eye samples, each receiving its own light for pixel glossyPixel[slot − irradianceSlots].
