@@ -187,6 +187,7 @@ Film renderSplat(const RenderContext& c, StagedFiles* outputs, PhotonStore* stor
 
 // The scene's part of a render: everything but the camera's.
 struct PreparedScene::Parts {
+    Parts(const Scene& s, const RenderConfig& c, Reporter& r, Ranks& k) : scene(s), cfg(c), reporter(r), ranks(k) {}
     const Scene& scene;
     const RenderConfig& cfg;
     Reporter& reporter;
@@ -200,7 +201,7 @@ struct PreparedScene::Parts {
 };
 
 PreparedScene::PreparedScene(const Scene& scene, const RenderConfig& cfg, Reporter& reporter, Ranks& ranks, bool keepsPhotons)
-    : parts_(new Parts{scene, cfg, reporter, ranks}) {
+    : parts_(new Parts(scene, cfg, reporter, ranks)) {
     cfg.validate();
     Parts& p = *parts_;
     Stats& stats = p.stats;

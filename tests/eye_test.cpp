@@ -103,7 +103,9 @@ TEST(EyePass, GlossySamplesReproduceTheirBsdf) {
             Bsdf bsdf(s, sp, wo);
             EXPECT_EQ(bsdf.bumped(), variant == 2);
             const Vec3 n = bsdf.shadingNormal();
-            if (variant == 2) EXPECT_LT(glm::dot(2.f * glm::dot(wo, n) * n - wo, sp.ng), 0.f) << "no bending to test";
+            if (variant == 2) {
+                EXPECT_LT(glm::dot(2.f * glm::dot(wo, n) * n - wo, sp.ng), 0.f) << "no bending to test";
+            }
             for (Vec3 wi : {Vec3(0.2f, 0.1f, 1.f), Vec3(-0.5f, 0.3f, 0.4f), Vec3(0.9f, -0.2f, 0.1f)}) {
                 wi = glm::normalize(wi);
                 const Vec3 want = 0.5f * bsdf.eval(wo, wi);  // weight 1/S

@@ -60,8 +60,12 @@ TEST(SparseReceivers, EverySampleHasOneOnItsOwnSurface) {
             covered = true;
             EXPECT_LT(glm::length(q - p), spacing);
             EXPECT_GT(glm::dot(n, m), 0.9f);
-            if (n.x != 0.f) EXPECT_EQ(q.x, p.x) << "a wall sample's receiver is on the wall";
-            if (n.y != 0.f) EXPECT_EQ(q.y, p.y) << "the plank's top and the floor under it do not mix";
+            if (n.x != 0.f) {
+                EXPECT_EQ(q.x, p.x) << "a wall sample's receiver is on the wall";
+            }
+            if (n.y != 0.f) {
+                EXPECT_EQ(q.y, p.y) << "the plank's top and the floor under it do not mix";
+            }
         }
         EXPECT_TRUE(covered) << "sample " << i;
     }
