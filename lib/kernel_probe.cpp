@@ -51,21 +51,36 @@ PhotonRoundsPlan roundsNoise(const EyePass& eye, const std::vector<float>& light
 
 }  // namespace
 
-void KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps,
-                                      FixedFilm parts[4], std::vector<int64_t> mine[2], double seconds[2], double& gather) {
-    std::vector<int64_t> slots[4];
-    for (int f = 0; f < 2; ++f) {
-        Timer t;
-        const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, first, last), kPhotonIndirect, f ? 0.5f : 1.f, ps);
-        const std::array<PhotonMap, 2> halves = halvesOf(scaled, c_.cfg.seed);
-        for (int h = 0; h < 2; ++h) {
-            FixedFilm& part = parts[2 * f + h];
-            part.width = c_.width, part.height = c_.height;
-            part.buffers[kIndirect].assign(values_, 0);
-            targets_.land(halves[h], splat_, part, slots[2 * f + h], f == 0 ? &totals_.splat : nullptr, f == 0 ? &totals_.coverage : nullptr);
-        }
-        seconds[f] = t.seconds();
+size_t KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps,
+                                        FixedFilm parts[4], std::vector<int64_t> mine[2], double seconds[2], double& gather,
+                                        const std::function<bool()>& timeUp) {
+    std::vector<int64_t> slots[4], portionSlots;
+    for (int j = 0; j < 4; ++j) {
+        parts[j].width = c_.width, parts[j].height = c_.height;
+        parts[j].buffers[kIndirect].assign(values_, 0);
     }
+    seconds[0] = seconds[1] = 0.0;
+    const size_t portion = std::max(PassTargets::kPortion, (last - first) / PassTargets::kPortions);
+    size_t end = first;
+    do {  // at least once: an empty share still sizes the slots the gather reads
+        size_t next = timeUp ? std::min(last, end + portion) : last;
+        while (next < last && indirect.rays[next].path == indirect.rays[next - 1].path) ++next;  // whole paths
+        for (int f = 0; f < 2; ++f) {
+            Timer t;
+            const PhotonMap scaled = scaledKernels(c_.scene, slice(indirect, end, next), kPhotonIndirect, f ? 0.5f : 1.f, ps);
+            const std::array<PhotonMap, 2> halves = halvesOf(scaled, c_.cfg.seed);
+            for (int h = 0; h < 2; ++h) {
+                std::vector<int64_t>& to = slots[2 * f + h];
+                targets_.land(halves[h], splat_, parts[2 * f + h], portionSlots, f == 0 ? &totals_.splat : nullptr,
+                              f == 0 ? &totals_.coverage : nullptr);
+                if (to.empty()) to.swap(portionSlots);
+                else
+                    for (size_t i = 0; i < to.size(); ++i) FixedFilm::addSaturating(to[i], portionSlots[i]);
+            }
+            seconds[f] += t.seconds();
+        }
+        end = next;
+    } while (end < last && !(timeUp && timeUp()));
     // The receivers searched once for B, C and D; A's gather alone is timed as a pass's.
     Timer gathering;
     targets_.gather({&slots[0]}, {&parts[0]}, splat_);
@@ -77,6 +92,7 @@ void KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first, s
         for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
         c_.ranks.sumAtRoot(light);
     }
+    return end;
 }
 
 float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole,
@@ -85,15 +101,18 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
     FixedFilm parts[4];            // A, B, C, D: their indirect layer only
     std::vector<int64_t> mine[2];  // this rank's light of the probed photons at 1 and at ½
     double seconds[2], gather = 0.0;  // the share's splats at 1 and at ½, before the gathers; a gather
-    landHalves(indirect, 0, share, ps, parts, mine, seconds, gather);
+    // Under a time limit the share is probed in portions: a deadline that passes during it ends
+    // the pass's indirect light there, with the paths probed so far (the scale chosen from them).
+    const size_t probed = landHalves(indirect, 0, share, ps, parts, mine, seconds, gather, timeUp);
+    const bool cut = probed < share;
     std::vector<float> light;
     KernelScaleProbe probe;
     // Rank 0 says whether the rest is probed too (−1), or the scale chosen. Past the deadline it
     // chooses from the share (every rank asks timeUp, which may agree across ranks).
-    const bool late = timeUp && timeUp();
+    const bool late = cut || (timeUp && timeUp());
     double scale = 1.0;
     if (c_.ranks.rank() == 0) {
-        probe = measure(parts, KernelScaleProbe::kShare, light);
+        probe = measure(parts, cut && probed > 0 ? double(n) / double(probed) : double(KernelScaleProbe::kShare), light);
         scale = !late && probeWidens(probe) ? -1.0 : choose(probe, light, seconds, gather, whole, other);
     }
     c_.ranks.broadcast(&scale, 1);
@@ -101,7 +120,7 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
     if (widened_) {
         FixedFilm rest[4];
         double unusedSeconds[2], unusedGather = 0.0;
-        landHalves(indirect, share, n, ps, rest, mine, unusedSeconds, unusedGather);
+        landHalves(indirect, share, n, ps, rest, mine, unusedSeconds, unusedGather, nullptr);
         if (c_.ranks.rank() == 0) {
             for (int j = 0; j < 4; ++j) {
                 std::vector<int64_t>& to = parts[j].buffers[kIndirect];
@@ -120,6 +139,10 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
     for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(pass[i], kept[i]);
     if (widened_) {
         covered = UINT64_MAX;  // every path's indirect photons
+        return m;
+    }
+    if (cut) {
+        covered = indirect.rays[probed].path;  // the paths before the first one not probed
         return m;
     }
     FixedFilm part;  // the splat's layers only
@@ -152,7 +175,7 @@ PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonM
     return part.rays[at];
 }
 
-KernelScaleProbe KernelScaleProbeStep::measure(const FixedFilm halves[4], int share, std::vector<float>& light) const {
+KernelScaleProbe KernelScaleProbeStep::measure(const FixedFilm halves[4], double share, std::vector<float>& light) const {
     const int64_t *A = halves[0].buffers[kIndirect].data(), *B = halves[1].buffers[kIndirect].data(),
                   *C = halves[2].buffers[kIndirect].data(), *D = halves[3].buffers[kIndirect].data();
     light.assign(values_, 0.f);

@@ -60,11 +60,12 @@ public:
 private:
     // The halves of photons [first, last) of `indirect` at scales 1 and ½ into `parts` (A, B, C,
     // D), this rank's light at each scale added to `mine`; the seconds of the splats at 1 and ½
-    // and of A's gather.
-    void landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps, FixedFilm parts[4],
-                    std::vector<int64_t> mine[2], double seconds[2], double& gather);
+    // and of A's gather. With `timeUp`, in portions of whole paths (as PassTargets::splat), up to
+    // the portion during which the deadline passed. Returns the end of the photons it took.
+    size_t landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps, FixedFilm parts[4],
+                      std::vector<int64_t> mine[2], double seconds[2], double& gather, const std::function<bool()>& timeUp);
     // At rank 0: the probe from the summed halves, `share` the pass's indirect photons over theirs.
-    KernelScaleProbe measure(const FixedFilm halves[4], int share, std::vector<float>& light) const;
+    KernelScaleProbe measure(const FixedFilm halves[4], double share, std::vector<float>& light) const;
     // At rank 0: the scale m of least expected error.
     double choose(const KernelScaleProbe& probe, const std::vector<float>& light, const double seconds[2], double gather,
                   const Timer& whole, double other);

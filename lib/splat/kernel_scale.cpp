@@ -17,7 +17,7 @@ float passRadiusScale(int p, float alpha) {
 }
 
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
-                                  const std::vector<float>& light, int width, double fixedScale, int share) {
+                                  const std::vector<float>& light, int width, double fixedScale, double share) {
     KernelScaleProbe p;
     const size_t pixels = light.size() / 3, height = pixels / size_t(width);
     const int blocksX = KernelScaleProbe::kBlocks, blocksY = KernelScaleProbe::kBlocks;

@@ -61,7 +61,7 @@ struct KernelScaleProbe {
 // pixels), the pass's light μ and the share s: the pass's indirect photons over the probe's.
 KernelScaleProbe probeKernelScale(const int64_t* a, const int64_t* b, const int64_t* c, const int64_t* d,
                                   const std::vector<float>& light, int width, double fixedScale,
-                                  int share = KernelScaleProbe::kShare);
+                                  double share = KernelScaleProbe::kShare);
 
 struct KernelScalePlan {
     int passes = 1;            // P, with no time limit
