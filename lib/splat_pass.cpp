@@ -142,7 +142,18 @@ EyePass SplatPasses::traceEye(int pass) {
     eye_.firstSample = pass * eye_.spp;
     eye_.firstDirectSample = pass * eye_.directSpp;
     eye_.measureFilmNoise = pass == 0 && probing_ && c_.cfg.photonRoundsAuto();
+    // The first pass, which every rank renders, measures where the film's light is spread; the
+    // passes after it take more film samples there (filmExtraSamples).
+    eye_.measureFilmSpread = pass == 0 && probing_ && eye_.directSpp >= 2;
+    eye_.extraFilm = pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr;
+    eye_.pass = pass;
     EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
+    if (eye_.measureFilmSpread) {
+        double removed[2] = {0.0, 0.0};
+        extraFilm_ = filmExtraSamples(eye.filmSpread, eye_.directSpp, removed);
+        c_.stats.setCount("film_extra_variance_removed", removed[0]);
+        c_.stats.setCount("film_extra_samples_share", removed[1]);
+    }
     eyeSeconds_ = t.seconds();
     c_.stats.addTime("eye", eyeSeconds_);
     c_.stats.setCount("eye_samples", double(eye.samples.size()));
@@ -155,6 +166,9 @@ double SplatPasses::renderFilm(int pass, FixedFilm& sum) {
     EyePassSettings film = eye_;
     film.spp = 0;
     film.firstDirectSample = pass * film.directSpp;
+    film.measureFilmNoise = film.measureFilmSpread = false;
+    film.extraFilm = pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr;
+    film.pass = pass;
     sum.add(traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, film, c_.pool, c_.reporter).film);
     sum.countFilmPass(film.directSamples > 0);
     c_.stats.addTime("film", t.seconds());

@@ -86,6 +86,7 @@ private:
     PhotonStore* store_;
     std::shared_ptr<const OcclusionGrid> grid_;  // the store's where there is one
     EyePassSettings eye_;
+    std::vector<uint16_t> extraFilm_;  // the passes' film samples beyond D a pixel, from the first pass
     PhotonSettings photons_;
     CoverageSettings coverage_;
     SplatSettings splat_;

@@ -257,3 +257,93 @@ TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
     st.measureFilmNoise = false;
     EXPECT_TRUE(traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter()).filmNoise.empty());
 }
+
+// filmExtraSamples (eye.h): an image whose film is spread evenly takes no extra samples; a
+// pixel whose spread stands far above the mean takes (kExtraMultiple − 1)·D; many such pixels
+// share the budget of kExtraShare · D a pixel.
+TEST(FilmExtra, SamplesGoWhereTheSpreadStandsOutWithinTheBudget) {
+    const int d = 16;
+    std::vector<float> even(1000, 0.3f);
+    for (size_t p = 0; p < even.size(); ++p) even[p] += 0.01f * float(p % 7);
+    for (uint16_t e : filmExtraSamples(even, d)) EXPECT_EQ(e, 0);
+
+    std::vector<float> edge(1000, 0.f);
+    edge[10] = 5.f;
+    edge[500] = 0.01f;  // far below the threshold
+    const std::vector<uint16_t> one = filmExtraSamples(edge, d);
+    EXPECT_EQ(one[10], (FilmExtra::kExtraMultiple - 1) * d);
+    EXPECT_EQ(one[500], 0);
+
+    std::vector<float> many(1000, 0.f);
+    for (size_t p = 0; p < many.size(); p += 20) many[p] = 1.f;  // 50 pixels, 20 times the mean
+    double removed[2];
+    const std::vector<uint16_t> shared = filmExtraSamples(many, d, removed);
+    int64_t total = 0;
+    for (uint16_t e : shared) total += e;
+    EXPECT_LE(double(total), FilmExtra::kExtraShare * d * double(many.size()));
+    EXPECT_GT(shared[0], 0);
+    EXPECT_EQ(shared[1], 0);
+    EXPECT_NEAR(removed[1], double(total) / (d * 1000.0), 1e-12);
+    EXPECT_GT(removed[0], 0.0);
+    EXPECT_LT(removed[0], 1.0);
+}
+
+// The extra samples under a point light (point_shadows): the first pass's spread gives them to
+// a few pixels (the edges of the boxes and their shadows; measured 2.1 % of the pixels at
+// 128 px); a later pass with them is the same as without at every other pixel, to the bit; at
+// the pixels that take at least D more, the film's variance over eight seeds falls (measured
+// 0.39 of it without them); and the image's mean is the same within 0.2 %.
+TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
+    Scene scene = loadScene(std::string(data) + "/point_shadows.gltf", silentReporter());
+    RayAccel accel(scene, 2);
+    LightSampler lights(scene);
+    ThreadPool pool(2);
+    EyePassSettings st;
+    st.width = st.height = 128;
+    st.spp = 0;
+    st.directSamples = 1;
+    st.directSpp = 16;
+    st.measureFilmSpread = true;
+    const EyePass first = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
+    const std::vector<uint16_t> extra = filmExtraSamples(first.filmSpread, st.directSpp);
+    size_t edges = 0, many = 0;
+    for (uint16_t e : extra) edges += e > 0, many += e >= st.directSpp;
+    RecordProperty("pixels_with_extra", std::to_string(double(edges) / double(extra.size())));
+    EXPECT_GT(many, 10u);
+    EXPECT_LT(double(edges), 0.05 * double(extra.size())) << "edges only";
+
+    st.measureFilmSpread = false;
+    const size_t n = extra.size();
+    std::vector<double> sum[2], squares[2];
+    for (int k = 0; k < 2; ++k) sum[k].assign(n, 0.0), squares[k].assign(n, 0.0);
+    double mean[2] = {0.0, 0.0};
+    const int seeds = 8;
+    for (int seed = 1; seed <= seeds; ++seed) {
+        st.seed = uint64_t(seed);
+        st.pass = 1;
+        st.firstDirectSample = st.directSpp;
+        Film films[2];
+        for (int k = 0; k < 2; ++k) {
+            st.extraFilm = k ? &extra : nullptr;
+            films[k] = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter()).film;
+        }
+        for (size_t p = 0; p < n; ++p) {
+            if (extra[p] == 0) ASSERT_EQ(films[0].layers[kDirect][p], films[1].layers[kDirect][p]) << "pixel " << p;
+            for (int k = 0; k < 2; ++k) {
+                const double v = films[k].layers[kDirect][p].x;
+                sum[k][p] += v, squares[k][p] += v * v, mean[k] += v;
+            }
+        }
+    }
+    double variance[2] = {0.0, 0.0};
+    for (size_t p = 0; p < n; ++p)
+        if (extra[p] >= st.directSpp)
+            for (int k = 0; k < 2; ++k) variance[k] += (squares[k][p] - sum[k][p] * sum[k][p] / seeds) / (seeds - 1);
+    RecordProperty("variance_with_over_without", std::to_string(variance[1] / variance[0]));
+    EXPECT_GT(variance[0], 0.0);
+    EXPECT_LT(variance[1], 0.5 * variance[0]);
+    RecordProperty("mean_with_over_without", std::to_string(mean[1] / mean[0]));
+    EXPECT_NEAR(mean[1] / mean[0], 1.0, 0.002);
+}

@@ -103,37 +103,60 @@ public:
     // The direct film (docs/design.md §4): D camera samples of its own sequence, each with
     // emission, albedo, normal and direct light, the light samples of all the pixel's film
     // samples stratified as one sequence.
-    void directFilm(int x, int y, std::vector<Vec3>* noise) const {
+    void directFilm(int x, int y, std::vector<Vec3>* noise, std::vector<float>* spread) const {
         if (!withFilm_) return;
         const uint32_t pixel = pixelOf(x, y);
+        const int extra = st_.extraFilm ? int((*st_.extraFilm)[pixel]) : 0;
         // The light of the first and of the second half of the samples: each half of the pass's
         // block of the sequence is stratified by itself (even and odd ones are not: the even
         // ones of a Sobol sequence lie in the left half of the pixel).
-        Vec3 halves[2] = {Vec3(0.f), Vec3(0.f)};
-        const float invFilm = 1.f / float(st_.directSpp);
-        const uint64_t scramble = hashKey(st_.seed, Stage::DirectFilm, pixel);
-        const uint64_t lightScramble = hashKey(st_.seed, Stage::DirectFilm, pixel, 1);
-        for (int s = 0; s < st_.directSpp; ++s) {
-            const uint32_t index = uint32_t(st_.firstDirectSample + s);
-            const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63);  // apart from the receivers'
-            Sampler sampler(st_.seed, Stage::DirectFilm, key);
-            const Vec3 before = noise ? filmLight(pixel) : Vec3(0.f);
-            const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
-            followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
-                            Vec3(invFilm), pixelCone_, st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
-                            [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
-                addFeatures(pixel, invFilm, bsdf);
-                if (!direct_ || reflectsNothing(scene_.materials[sp.material])) return;
-                Sampler ds(st_.seed, Stage::Direct, key);
-                addDirect(pixel, weight, estimateDirectAcrossSamples(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
-                                                                     lightScramble, index, ds));
-            });
-            if (noise) halves[2 * s >= st_.directSpp] += filmLight(pixel) - before;
+        Vec3 halves[2] = {Vec3(0.f), Vec3(0.f)}, sum(0.f), squares(0.f);
+        const float invFilm = 1.f / float(st_.directSpp + extra);
+        for (int s = 0; s < st_.directSpp + extra; ++s) {
+            const bool more = s >= st_.directSpp;  // a sample of the pixel's extra sequence
+            const Vec3 before = noise || spread ? filmLight(pixel) : Vec3(0.f);
+            if (more)
+                filmSample(x, y, uint32_t(st_.pass * FilmExtra::kExtraBlock + s - st_.directSpp), 2, invFilm);
+            else
+                filmSample(x, y, uint32_t(st_.firstDirectSample + s), 0, invFilm);
+            if (!noise && !spread) continue;
+            const Vec3 light = filmLight(pixel) - before;
+            if (noise && !more) halves[2 * s >= st_.directSpp] += light;
+            sum += light, squares += light * light;
         }
         if (noise && st_.directSpp >= 2) {
             const Vec3 d = halves[0] - halves[1];  // each half's mean is 2 × its sum
             (*noise)[pixel] = d * d;               // (2·Σfirst − 2·Σsecond)² / 4
         }
+        if (spread && st_.directSpp >= 2 && extra == 0) {
+            // A sample's light is D × what it added: its mean D·Σ/D, its variance D²·(Σ² − Σ²/D)/(D − 1).
+            const float d = float(st_.directSpp);
+            const Vec3 mean = sum, variance = glm::max(Vec3(0.f), (squares - sum * sum / d) * (d * d / (d - 1.f)));
+            float s = 0.f;
+            for (int c = 0; c < 3; ++c) s += variance[c] / (mean[c] * mean[c] + 0.01f);
+            (*spread)[pixel] = std::sqrt(s);
+        }
+    }
+
+    // One film sample of the pixel at (x, y): point `index` of its sequence `sequence` (0: the
+    // pass's block, 2: the extra samples'), weight `invFilm`.
+    void filmSample(int x, int y, uint32_t index, int sequence, float invFilm) const {
+        const uint32_t pixel = pixelOf(x, y);
+        const uint64_t scramble = hashKey(st_.seed, Stage::DirectFilm, pixel, uint64_t(sequence));
+        const uint64_t lightScramble = hashKey(st_.seed, Stage::DirectFilm, pixel, uint64_t(sequence) + 1);
+        // Apart from the receivers' keys (bit 63), and the extra sequence's from the pass's (bit 62).
+        const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63) ^ (sequence ? uint64_t(1) << 62 : 0);
+        Sampler sampler(st_.seed, Stage::DirectFilm, key);
+        const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
+        followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),
+                        Vec3(invFilm), pixelCone_, st_.maxSpecularDepth, sampler, film_.layers[kEmission][pixel],
+                        [&](const SurfacePoint& sp, const Bsdf& bsdf, const Vec3& wo, const Vec3& weight) {
+            addFeatures(pixel, invFilm, bsdf);
+            if (!direct_ || reflectsNothing(scene_.materials[sp.material])) return;
+            Sampler ds(st_.seed, Stage::Direct, key);
+            addDirect(pixel, weight, estimateDirectAcrossSamples(accel_, *lights_, sp, bsdf, wo, st_.directSamples,
+                                                                 lightScramble, index, ds));
+        });
     }
 
 private:
@@ -166,6 +189,8 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
     const EyePassTracer tracer(scene, accel, lights, camera, st, out.film);
     if (st.measureFilmNoise) out.filmNoise.assign(out.film.pixelCount(), Vec3(0.f));
     std::vector<Vec3>* noise = st.measureFilmNoise ? &out.filmNoise : nullptr;
+    if (st.measureFilmSpread) out.filmSpread.assign(out.film.pixelCount(), 0.f);
+    std::vector<float>* spread = st.measureFilmSpread ? &out.filmSpread : nullptr;
     std::vector<EyeSamples> rows(st.height);
     reporter.begin("eye pass", st.height, "rows");
     pool.parallelFor(st.height, 4, [&](int64_t y0, int64_t y1, int) {
@@ -174,7 +199,7 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
             row.reserve(size_t(st.width) * st.spp);
             for (int x = 0; x < st.width; ++x) {
                 tracer.receivers(x, int(y), row);
-                tracer.directFilm(x, int(y), noise);
+                tracer.directFilm(x, int(y), noise, spread);
             }
             reporter.advance(1);
         }
@@ -189,6 +214,39 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
         r = EyeSamples();
     }
     return out;
+}
+
+std::vector<uint16_t> filmExtraSamples(const std::vector<float>& spread, int directSpp, double* removed) {
+    std::vector<uint16_t> extra(spread.size(), 0);
+    double total = 0.0;
+    for (float s : spread) total += double(s);
+    if (!(total > 0.0) || directSpp <= 0) return extra;
+    // n_p = max(D, spread_p / λ) (Neyman's allocation above the D every pixel takes), with λ·D
+    // the mean spread times kSpreadOverMean: a film whose light is spread evenly takes none.
+    const double threshold = FilmExtra::kSpreadOverMean * total / double(spread.size());
+    const double most = std::min<double>((FilmExtra::kExtraMultiple - 1) * directSpp, FilmExtra::kExtraBlock);
+    std::vector<double> want(spread.size(), 0.0);
+    double wanted = 0.0;
+    for (size_t p = 0; p < spread.size(); ++p) {
+        want[p] = std::min(most, std::max(0.0, double(directSpp) * (double(spread[p]) / threshold - 1.0)));
+        wanted += want[p];
+    }
+    const double budget = FilmExtra::kExtraShare * double(directSpp) * double(spread.size());
+    const double scale = wanted > budget ? budget / wanted : 1.0;
+    double variance = 0.0, gone = 0.0, samples = 0.0;
+    const double d = double(directSpp);
+    for (size_t p = 0; p < spread.size(); ++p) {
+        extra[p] = uint16_t(std::floor(want[p] * scale));
+        const double v = double(spread[p]) * spread[p];
+        variance += v / d;
+        gone += v * (1.0 / d - 1.0 / (d + extra[p]));
+        samples += extra[p];
+    }
+    if (removed) {
+        removed[0] = variance > 0.0 ? gone / variance : 0.0;
+        removed[1] = samples / (d * double(spread.size()));
+    }
+    return extra;
 }
 
 }  // namespace rs
