@@ -215,7 +215,8 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
     cmd.add({"--direct-spp", "N",
              "with --direct sample, camera samples a pixel and pass of the direct film: emission, direct light, albedo "
              "and normal, apart from the photons' receivers (default " + std::to_string(d.splat.directSpp) +
-                 "; 0: at the receivers)",
+                 "; 0: at the receivers); after the first pass, pixels whose film it found far noisier than the "
+                 "image's (the edges of objects and hard shadows) take up to 8 times as many",
              [&](const std::string& v) { cfg.directSpp = parseCount<int>("--direct-spp", v); }});
     cmd.add({"--light-samples", "N", "light samples per direct film sample (or eye sample, with --direct-spp 0) for --direct sample (default " +
                  std::to_string(d.splat.lightSamples) + ")",
