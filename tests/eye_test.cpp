@@ -24,6 +24,17 @@ Camera lookingDownZ(Vec3 position, float yfov = 0.5f) {
     return c;
 }
 
+// A direct film alone (no eye samples): D = 16 camera samples a pixel of a size × size image,
+// one light sample each.
+EyePassSettings filmOnly(int size) {
+    EyePassSettings st;
+    st.width = st.height = size;
+    st.spp = 0;
+    st.directSamples = 1;
+    st.directSpp = 16;
+    return st;
+}
+
 }  // namespace
 
 TEST(UnitEncoding, RoundTripWithinAHundredthOfADegree) {
@@ -229,11 +240,7 @@ TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
     RayAccel accel(scene, 2);
     LightSampler lights(scene);
     ThreadPool pool(2);
-    EyePassSettings st;
-    st.width = st.height = 64;
-    st.spp = 0;
-    st.directSamples = 1;
-    st.directSpp = 16;
+    EyePassSettings st = filmOnly(64);
     st.measureFilmNoise = true;
     double estimated = 0.0, between = 0.0;
     for (uint64_t seed = 1; seed <= 8; seed += 2) {
@@ -300,11 +307,7 @@ TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
     RayAccel accel(scene, 2);
     LightSampler lights(scene);
     ThreadPool pool(2);
-    EyePassSettings st;
-    st.width = st.height = 128;
-    st.spp = 0;
-    st.directSamples = 1;
-    st.directSpp = 16;
+    EyePassSettings st = filmOnly(128);
     st.measureFilmSpread = true;
     const EyePass first = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
     const std::vector<uint16_t> extra = filmExtraSamples(first.filmSpread, st.directSpp);
@@ -330,7 +333,9 @@ TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
             films[k] = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter()).film;
         }
         for (size_t p = 0; p < n; ++p) {
-            if (extra[p] == 0) ASSERT_EQ(films[0].layers[kDirect][p], films[1].layers[kDirect][p]) << "pixel " << p;
+            if (extra[p] == 0) {
+                ASSERT_EQ(films[0].layers[kDirect][p], films[1].layers[kDirect][p]) << "pixel " << p;
+            }
             for (int k = 0; k < 2; ++k) {
                 const double v = films[k].layers[kDirect][p].x;
                 sum[k][p] += v, squares[k][p] += v * v, mean[k] += v;
