@@ -48,10 +48,10 @@ struct EyePassSettings {
 // (docs/design.md §4). Pixel p takes max(D, spread_p / λ) (Neyman's allocation, above the D
 // every pixel takes), λ·D being kSpreadOverMean times the image's mean spread, at most
 // kExtraMultiple · D, and all of them together at most kExtraShare · D a pixel. Under a point
-// light the film's error is all at the edges of objects and shadows, a pixel in seventy, where
-// the spread is fifty times the mean: a few hundredths more samples take two thirds of that
-// error away. A film whose light is spread more evenly (an area light's or the sky's noise, a
-// room's) takes next to none: at twice or four times the mean instead, the daylight room took a
+// light the film's error is all at the edges of objects and shadows, a pixel in seventy: at
+// 500 px the point lights take 4 % more samples, which remove four fifths of the film's variance
+// (as the spread measures it). A film whose light is spread more evenly (an area light's or the
+// sky's noise, a room's) takes next to none: at twice the mean instead, the daylight room took a
 // quarter more samples for 2 % less error (docs/performance.md).
 struct FilmExtra {
     static constexpr double kSpreadOverMean = 16.0;
