@@ -145,8 +145,7 @@ EyePass SplatPasses::traceEye(int pass) {
     // The first pass, which every rank renders, measures where the film's light is spread; the
     // passes after it take more film samples there (filmExtraSamples).
     eye_.measureFilmSpread = pass == 0 && probing_ && eye_.directSpp >= 2;
-    eye_.extraFilm = pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr;
-    eye_.pass = pass;
+    eye_.extraFilm = extraFilmOf(pass);
     EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
     if (eye_.measureFilmSpread) {
         double removed[2] = {0.0, 0.0};
@@ -167,8 +166,7 @@ double SplatPasses::renderFilm(int pass, FixedFilm& sum) {
     film.spp = 0;
     film.firstDirectSample = pass * film.directSpp;
     film.measureFilmNoise = film.measureFilmSpread = false;
-    film.extraFilm = pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr;
-    film.pass = pass;
+    film.extraFilm = extraFilmOf(pass);
     sum.add(traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, film, c_.pool, c_.reporter).film);
     sum.countFilmPass(film.directSamples > 0);
     c_.stats.addTime("film", t.seconds());

@@ -68,6 +68,8 @@ public:
 
 private:
     EyePass traceEye(int pass);
+    // The film samples beyond D that pass `pass` takes a pixel: the first pass's choice, from pass 1 on.
+    const std::vector<uint16_t>* extraFilmOf(int pass) const { return pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr; }
     float receiverSpacing(int pass) const;
     PhotonMap tracePhotonsOf(int pass, int round, PhotonSettings& passSettings);
     PhotonMap storedPhotonsOf(int pass, int round, PhotonSettings& passSettings);

@@ -325,8 +325,7 @@ TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
     const int seeds = 8;
     for (int seed = 1; seed <= seeds; ++seed) {
         st.seed = uint64_t(seed);
-        st.pass = 1;
-        st.firstDirectSample = st.directSpp;
+        st.firstDirectSample = st.directSpp;  // pass 1
         Film films[2];
         for (int k = 0; k < 2; ++k) {
             st.extraFilm = k ? &extra : nullptr;

@@ -112,13 +112,15 @@ public:
         // ones of a Sobol sequence lie in the left half of the pixel).
         Vec3 halves[2] = {Vec3(0.f), Vec3(0.f)}, sum(0.f), squares(0.f);
         const float invFilm = 1.f / float(st_.directSpp + extra);
+        const FilmSequence sequences[2] = {FilmSequence(st_.seed, pixel, 0), FilmSequence(st_.seed, pixel, 2)};
+        const int pass = st_.firstDirectSample / st_.directSpp;
         for (int s = 0; s < st_.directSpp + extra; ++s) {
             const bool more = s >= st_.directSpp;  // a sample of the pixel's extra sequence
             const Vec3 before = noise || spread ? filmLight(pixel) : Vec3(0.f);
             if (more)
-                filmSample(x, y, uint32_t(st_.pass * FilmExtra::kExtraBlock + s - st_.directSpp), 2, invFilm);
+                filmSample(x, y, uint32_t(pass * FilmExtra::kExtraBlock + s - st_.directSpp), sequences[1], invFilm);
             else
-                filmSample(x, y, uint32_t(st_.firstDirectSample + s), 0, invFilm);
+                filmSample(x, y, uint32_t(st_.firstDirectSample + s), sequences[0], invFilm);
             if (!noise && !spread) continue;
             const Vec3 light = filmLight(pixel) - before;
             if (noise && !more) halves[2 * s >= st_.directSpp] += light;
@@ -138,14 +140,22 @@ public:
         }
     }
 
-    // One film sample of the pixel at (x, y): point `index` of its sequence `sequence` (0: the
-    // pass's block, 2: the extra samples'), weight `invFilm`.
-    void filmSample(int x, int y, uint32_t index, int sequence, float invFilm) const {
+    // One of a pixel's film sequences: 0, the passes' blocks of D; 2, the extra samples'. Its
+    // camera points' and light points' scrambles, and the bit that keeps its keys apart.
+    struct FilmSequence {
+        FilmSequence(uint64_t seed, uint32_t pixel, uint64_t sequence)
+            : scramble(hashKey(seed, Stage::DirectFilm, pixel, sequence)),
+              lightScramble(hashKey(seed, Stage::DirectFilm, pixel, sequence + 1)),
+              keyBits((uint64_t(1) << 63) ^ (sequence ? uint64_t(1) << 62 : 0)) {}
+        uint64_t scramble, lightScramble;
+        uint64_t keyBits;  // apart from the receivers' keys (bit 63), and the extra sequence's from the passes' (bit 62)
+    };
+
+    // One film sample of the pixel at (x, y): point `index` of `sequence`, weight `invFilm`.
+    void filmSample(int x, int y, uint32_t index, const FilmSequence& sequence, float invFilm) const {
         const uint32_t pixel = pixelOf(x, y);
-        const uint64_t scramble = hashKey(st_.seed, Stage::DirectFilm, pixel, uint64_t(sequence));
-        const uint64_t lightScramble = hashKey(st_.seed, Stage::DirectFilm, pixel, uint64_t(sequence) + 1);
-        // Apart from the receivers' keys (bit 63), and the extra sequence's from the pass's (bit 62).
-        const uint64_t key = pixelSampleKey(pixel, index) ^ (uint64_t(1) << 63) ^ (sequence ? uint64_t(1) << 62 : 0);
+        const uint64_t scramble = sequence.scramble, lightScramble = sequence.lightScramble;
+        const uint64_t key = pixelSampleKey(pixel, index) ^ sequence.keyBits;
         Sampler sampler(st_.seed, Stage::DirectFilm, key);
         const Vec2 raster = Vec2(float(x), float(y)) + sobol2D(index, scramble);
         followCameraRay(scene_, accel_, environment(), rays_.origin(raster), rays_.direction(raster),

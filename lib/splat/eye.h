@@ -39,9 +39,9 @@ struct EyePassSettings {
     // EyePass::filmSpread, where there is a direct film of D ≥ 2 (the first pass, for filmExtraSamples).
     bool measureFilmSpread = false;
     // Per pixel, film samples this pass takes beyond the D (filmExtraSamples), from a sequence of
-    // their own: pass p's are [p·kExtraBlock, p·kExtraBlock + extra) of it. Null: none.
+    // their own: pass p's (p = firstDirectSample / D) are [p·kExtraBlock, p·kExtraBlock + extra)
+    // of it. Null: none.
     const std::vector<uint16_t>* extraFilm = nullptr;
-    int pass = 0;
 };
 
 // Film samples beyond the D a pixel takes where the first pass's film found its light spread
