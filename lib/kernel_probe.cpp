@@ -52,9 +52,9 @@ PhotonRoundsPlan roundsNoise(const EyePass& eye, const std::vector<float>& light
 }  // namespace
 
 size_t KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps,
-                                        FixedFilm parts[4], std::vector<int64_t> mine[2], double seconds[2], double& gather,
+                                        FixedFilm parts[4], std::vector<int64_t> slots[4], double seconds[2],
                                         const std::function<bool()>& timeUp) {
-    std::vector<int64_t> slots[4], portionSlots;
+    std::vector<int64_t> portionSlots;
     for (int j = 0; j < 4; ++j) {
         parts[j].width = c_.width, parts[j].height = c_.height;
         parts[j].buffers[kIndirect].assign(values_, 0);
@@ -81,46 +81,62 @@ size_t KernelScaleProbeStep::landHalves(const PhotonMap& indirect, size_t first,
         }
         end = next;
     } while (end < last && !(timeUp && timeUp()));
+    return end;
+}
+
+void KernelScaleProbeStep::gatherHalves(FixedFilm parts[4], std::vector<int64_t> slots[4], std::vector<int64_t> mine[2],
+                                        double& gather) {
     // The receivers searched once for B, C and D; A's gather alone is timed as a pass's.
     Timer gathering;
     targets_.gather({&slots[0]}, {&parts[0]}, splat_);
     gather = gathering.seconds();
     targets_.gather({&slots[1], &slots[2], &slots[3]}, {&parts[1], &parts[2], &parts[3]}, splat_);
-    for (int j = 0; j < 4; ++j) {
-        std::vector<int64_t>& light = parts[j].buffers[kIndirect];
-        mine[j / 2].resize(values_);
-        for (size_t i = 0; i < values_; ++i) mine[j / 2][i] += light[i];
-        c_.ranks.sumAtRoot(light);
-    }
-    return end;
+    for (int j = 0; j < 4; ++j) addMine(parts[j], mine[j / 2]);
+}
+
+void KernelScaleProbeStep::addMine(FixedFilm& part, std::vector<int64_t>& mine) {
+    std::vector<int64_t>& light = part.buffers[kIndirect];
+    mine.resize(values_);
+    for (size_t i = 0; i < values_; ++i) mine[i] += light[i];
+    c_.ranks.sumAtRoot(light);
 }
 
 float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole,
-                                double other, const std::function<bool()>& timeUp, uint64_t& covered) {
+                                double other, const SplatTime& time, uint64_t& covered) {
+    const std::function<bool()> timeUp = time.timeUp();
     const size_t n = indirect.rays.size(), share = n / KernelScaleProbe::kShare;
-    FixedFilm parts[4];            // A, B, C, D: their indirect layer only
-    std::vector<int64_t> mine[2];  // this rank's light of the probed photons at 1 and at ½
+    FixedFilm parts[4];              // A, B, C, D: their indirect layer only
+    std::vector<int64_t> slots[4];   // their receivers' sums
+    std::vector<int64_t> mine[2];    // this rank's light of the probed photons at 1 and at ½
     double seconds[2], gather = 0.0;  // the share's splats at 1 and at ½, before the gathers; a gather
-    // Under a time limit the share is probed in portions: a deadline that passes during it ends
-    // the pass's indirect light there, with the paths probed so far (the scale chosen from them).
-    const size_t probed = landHalves(indirect, 0, share, ps, parts, mine, seconds, gather, timeUp);
-    const bool cut = probed < share;
+    // Under a time limit the share is probed in portions. A deadline that passes during it, or
+    // leaves too little time for the halves' gathers, cuts the probe short: no later pass
+    // follows, so no scale is chosen (cutShort).
+    const size_t probed = landHalves(indirect, 0, share, ps, parts, slots, seconds, timeUp);
+    if (probed < share || (time.lacks && time.lacks(2.0 * time.gather))) {
+        covered = cutShort(indirect, probed, ps, parts, slots, sum, timeUp);
+        return 1.f;
+    }
+    gatherHalves(parts, slots, mine, gather);
     std::vector<float> light;
     KernelScaleProbe probe;
-    // Rank 0 says whether the rest is probed too (−1), or the scale chosen. Past the deadline it
-    // chooses from the share (every rank asks timeUp, which may agree across ranks).
-    const bool late = cut || (timeUp && timeUp());
+    // Rank 0 says whether the rest is probed too (−1), or the scale chosen. Under a time limit,
+    // the rest only where its halves and their gathers fit the time left.
+    const double rest = (seconds[0] + seconds[1]) * double(n - share) / double(std::max<size_t>(share, 1));
+    const bool late = time.lacks && time.lacks(rest + 2.0 * time.gather);
     double scale = 1.0;
     if (c_.ranks.rank() == 0) {
-        probe = measure(parts, cut && probed > 0 ? double(n) / double(probed) : double(KernelScaleProbe::kShare), light);
+        probe = measure(parts, double(KernelScaleProbe::kShare), light);
         scale = !late && probeWidens(probe) ? -1.0 : choose(probe, light, seconds, gather, whole, other);
     }
     c_.ranks.broadcast(&scale, 1);
     widened_ = scale < 0.0;
     if (widened_) {
         FixedFilm rest[4];
+        std::vector<int64_t> restSlots[4];
         double unusedSeconds[2], unusedGather = 0.0;
-        landHalves(indirect, share, n, ps, rest, mine, unusedSeconds, unusedGather, nullptr);
+        landHalves(indirect, share, n, ps, rest, restSlots, unusedSeconds, nullptr);
+        gatherHalves(rest, restSlots, mine, unusedGather);
         if (c_.ranks.rank() == 0) {
             for (int j = 0; j < 4; ++j) {
                 std::vector<int64_t>& to = parts[j].buffers[kIndirect];
@@ -134,15 +150,9 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
     }
     const float m = float(scale);
     for (FixedFilm& part : parts) part = FixedFilm();  // the halves are done with: freed before the rest is splatted
-    std::vector<int64_t>& pass = sum.buffers[kIndirect];
-    const std::vector<int64_t>& kept = mine[keptProbeScale(m) < 1.f ? 1 : 0];
-    for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(pass[i], kept[i]);
+    keep(mine[keptProbeScale(m) < 1.f ? 1 : 0], sum);
     if (widened_) {
         covered = UINT64_MAX;  // every path's indirect photons
-        return m;
-    }
-    if (cut) {
-        covered = indirect.rays[probed].path;  // the paths before the first one not probed
         return m;
     }
     FixedFilm part;  // the splat's layers only
@@ -152,6 +162,34 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
                              &totals_.splat, &totals_.coverage, timeUp);
     sum.add(part);
     return m;
+}
+
+uint64_t KernelScaleProbeStep::cutShort(const PhotonMap& indirect, size_t probed, const PhotonSettings& ps, FixedFilm parts[4],
+                                        std::vector<int64_t> slots[4], FixedFilm& sum, const std::function<bool()>& timeUp) {
+    const size_t n = indirect.rays.size();
+    for (size_t i = 0; i < slots[1].size(); ++i) FixedFilm::addSaturating(slots[0][i], slots[1][i]);
+    std::vector<int64_t>& light = parts[0].buffers[kIndirect];
+    for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], parts[1].buffers[kIndirect][i]);
+    uint64_t covered = probed < n ? indirect.rays[probed].path : UINT64_MAX;  // the paths before the first one not probed
+    FixedFilm part;  // the splat's layers only
+    part.width = c_.width, part.height = c_.height;
+    for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
+    // Where the whole share was probed with time left, the rest follow at scale 1 until the
+    // deadline, onto the same receivers' sums.
+    if (probed < n && timeUp && !timeUp())
+        covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, probed, n), kPhotonIndirect, 1.f, ps), splat_, part,
+                                 &totals_.splat, &totals_.coverage, timeUp, &slots[0]);
+    targets_.gather({&slots[0]}, {&parts[0]}, splat_);
+    keep(light, sum);
+    sum.add(part);
+    c_.stats.setCount("kernel_probe_cut", 1);
+    c_.stats.setCount("kernel_probe_widened", 0);
+    return covered;
+}
+
+void KernelScaleProbeStep::keep(const std::vector<int64_t>& kept, FixedFilm& sum) const {
+    std::vector<int64_t>& pass = sum.buffers[kIndirect];
+    for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(pass[i], kept[i]);
 }
 
 PhotonRay KernelScaleProbeStep::asSplatted(const RenderContext& c, const PhotonMap& traced, size_t index, float m, bool widened,

@@ -20,6 +20,19 @@ namespace rs {
 
 class PassTargets;
 
+// A splat's time under a time limit (none without one): lacks(s), whether under s seconds are
+// left before the splat has to end (the deadline less its gather: targets.h), asked alike by
+// every rank; `gather`, the seconds a gather of the receivers takes.
+struct SplatTime {
+    std::function<bool(double)> lacks;
+    double gather = 0.0;
+    // Whether the splat has to end now (after its portion).
+    std::function<bool()> timeUp() const {
+        if (!lacks) return nullptr;
+        return [l = lacks] { return l(0.0); };
+    }
+};
+
 // Under a time limit a pass is started when its steps before the splat and this share of its
 // splat fit: a pass cut short still adds a whole direct film, and its photons count by their
 // share (FixedFilm::photonPasses).
@@ -41,7 +54,7 @@ public:
     // pass apart from their splat; `whole`: runs since the passes began. Adds their light to
     // `sum` and returns the scale chosen; `covered`: the paths whose indirect photons it splatted.
     float run(const PhotonMap& indirect, const PhotonSettings& ps, FixedFilm& sum, const Timer& whole, double other,
-              const std::function<bool()>& timeUp, uint64_t& covered);
+              const SplatTime& time, uint64_t& covered);
     // Whether the probe took all of the pass's indirect photons (probeWidens).
     bool widened() const { return widened_; }
     // With a time limit, at rank 0: the seconds a later pass needs (its part before the splat
@@ -58,12 +71,24 @@ public:
                                 const PhotonSettings& ps);
 
 private:
-    // The halves of photons [first, last) of `indirect` at scales 1 and ½ into `parts` (A, B, C,
-    // D), this rank's light at each scale added to `mine`; the seconds of the splats at 1 and ½
-    // and of A's gather. With `timeUp`, in portions of whole paths (as PassTargets::splat), up to
-    // the portion during which the deadline passed. Returns the end of the photons it took.
+    // The halves of photons [first, last) of `indirect` at scales 1 and ½ landed in `parts` (A,
+    // B, C, D) and, on sparse receivers, their `slots`; the seconds of the splats at 1 and ½.
+    // With `timeUp`, in portions of whole paths (as PassTargets::splat), up to the portion during
+    // which the deadline passed. Returns the end of the photons it took.
     size_t landHalves(const PhotonMap& indirect, size_t first, size_t last, const PhotonSettings& ps, FixedFilm parts[4],
-                      std::vector<int64_t> mine[2], double seconds[2], double& gather, const std::function<bool()>& timeUp);
+                      std::vector<int64_t> slots[4], double seconds[2], const std::function<bool()>& timeUp);
+    // The halves' receivers gathered into `parts`, this rank's light at each scale added to
+    // `mine`, the halves summed at rank 0; `gather`: the seconds of A's gather.
+    void gatherHalves(FixedFilm parts[4], std::vector<int64_t> slots[4], std::vector<int64_t> mine[2], double& gather);
+    // This rank's indirect light of `part` added to `mine`, and `part`'s summed at rank 0.
+    void addMine(FixedFilm& part, std::vector<int64_t>& mine);
+    // A probe cut short by the deadline, `probed` of `indirect` landed in `parts` and `slots`:
+    // the probed paths' light kept at 1, A and B gathered as one, after (where the time is not up)
+    // the rest of the photons splatted at 1 onto the same receivers. Returns the paths covered.
+    uint64_t cutShort(const PhotonMap& indirect, size_t probed, const PhotonSettings& ps, FixedFilm parts[4],
+                      std::vector<int64_t> slots[4], FixedFilm& sum, const std::function<bool()>& timeUp);
+    // The probed photons' light at the scale kept, into the pass.
+    void keep(const std::vector<int64_t>& kept, FixedFilm& sum) const;
     // At rank 0: the probe from the summed halves, `share` the pass's indirect photons over theirs.
     KernelScaleProbe measure(const FixedFilm halves[4], double share, std::vector<float>& light) const;
     // At rank 0: the scale m of least expected error.

@@ -137,7 +137,7 @@ SplatPasses::SplatPasses(const RenderContext& c, StagedFiles* outputs, PhotonSto
 }
 
 // The eye samples of pass `pass` (the next S of each pixel's sequence) and its direct film.
-EyePass SplatPasses::traceEye(int pass) {
+EyePass SplatPasses::traceEye(int pass, const Deadline& deadline) {
     Timer t;
     eye_.firstSample = pass * eye_.spp;
     eye_.firstDirectSample = pass * eye_.directSpp;
@@ -146,7 +146,12 @@ EyePass SplatPasses::traceEye(int pass) {
     // passes after it take more film samples there (filmExtraSamples).
     eye_.measureFilmSpread = pass == 0 && probing_ && eye_.directSpp >= 2;
     eye_.extraFilm = extraFilmOf(pass);
-    EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool, c_.reporter);
+    EyePassSettings settings = eye_;
+    if (pass == 0) settings.directSpp = firstFilmSpp(deadline);
+    EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, settings, c_.pool, c_.reporter);
+    // The film's noise as a film of D samples would have it (the passes' rounds weigh that).
+    const float smaller = eye_.directSpp > 0 ? float(settings.directSpp) / float(eye_.directSpp) : 1.f;
+    for (Vec3& v : eye.filmNoise) v *= smaller;
     if (eye_.measureFilmSpread) {
         double removed[2] = {0.0, 0.0};
         extraFilm_ = filmExtraSamples(eye.filmSpread, eye_.directSpp, removed);
@@ -158,6 +163,25 @@ EyePass SplatPasses::traceEye(int pass) {
     c_.stats.setCount("eye_samples", double(eye.samples.size()));
     c_.stats.setCount("eye_samples_mb", double(eye.samples.bytes()) / kMB);
     return eye;
+}
+
+// Under a time limit, the first pass's direct film: D samples a pixel where the eye pass fits a
+// share of the time left (by estimateEyePass), else fewer (filmSppWithin). Rank 0 chooses for
+// every rank. Without a limit, D.
+int SplatPasses::firstFilmSpp(const Deadline& deadline) const {
+    const int d = eye_.directSpp;
+    if (!deadline.clock || d < 4) return d;
+    double spp = d;
+    if (c_.ranks.rank() == 0) {
+        const EyePassCost cost = estimateEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool);
+        spp = filmSppWithin(cost, kFirstEyeShare * (deadline.seconds - deadline.clock->seconds()), d);
+    }
+    c_.ranks.broadcast(&spp, 1);
+    c_.stats.setCount("first_pass_direct_spp", spp);
+    if (int(spp) < d)
+        c_.reporter.info("the first pass's direct film at " + std::to_string(int(spp)) +
+                         " samples a pixel, for its eye pass to fit the time limit");
+    return int(spp);
 }
 
 double SplatPasses::renderFilm(int pass, FixedFilm& sum) {
@@ -231,7 +255,7 @@ PhotonMap SplatPasses::storedPhotonsOf(int pass, int round, PhotonSettings& pass
 double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadline& deadline) {
     Timer t;
     const int pass = share.pass;
-    EyePass eye = traceEye(pass);
+    EyePass eye = traceEye(pass, deadline);
     Timer trees;
     OcclusionTreeStats ts;
     PassTargets targets(c_.accel, *grid_, eye.samples, c_.width, c_.height, receiverSpacing(pass), c_.pool, c_.reporter,
@@ -243,8 +267,10 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
         c_.reporter.warn(c_.scene.path + ": " + std::to_string(ts.samplesOutside) + " eye samples lie outside the grid and get no light");
     if (pass == 0) eyeAndTrees_ = t.seconds(), photonsBegan_ = whole_.seconds();
     if (!replaying_ && share.share == 0) sum.add(eye.film);  // the eye pass's own light: emission, albedo, normal, direct
-    // Its photon rounds, each new paths splatted on the same eye samples, until the deadline.
-    const std::function<bool()> timeUp = timeUpFor(share, deadline);
+    // Its photon rounds, each new paths splatted on the same eye samples, until the deadline
+    // less the time the receivers' gather after them takes.
+    const double gather = deadline.clock ? targets.gatherSeconds() : 0.0;
+    const std::function<bool(double)> lacks = lacksFor(share, Deadline{deadline.clock, deadline.seconds - gather});
     // Their indirect photons' receivers are gathered once, after the last.
     const int rounds = roundsOf(pass);
     std::vector<int64_t> sums;
@@ -254,10 +280,10 @@ double SplatPasses::render(const PassShare& share, FixedFilm& sum, const Deadlin
         PhotonMap photons = store_ ? storedPhotonsOf(pass, round, passSettings) : tracePhotonsOf(pass, round, passSettings);
         if (replaying_) replayRay(photons, passSettings);
         const double before = t.seconds();
-        const double splat = splatPass(pass, round, share, targets, eye, std::move(photons), passSettings, sum, timeUp,
-                                       rounds > 1 ? &sums : nullptr);
+        const double splat = splatPass(pass, round, share, targets, eye, std::move(photons), passSettings, sum,
+                                       {lacks, gather}, rounds > 1 ? &sums : nullptr);
         if (round == 0) needs = before + splat;
-        if (round + 1 < rounds && timeUp && timeUp()) break;
+        if (round + 1 < rounds && lacks && lacks(0.0)) break;
     }
     c_.stats.setCount("photon_rounds", rounds);
     if (rounds > 1) {
@@ -288,8 +314,9 @@ int SplatPasses::roundsOf(int pass) const {
 // splats its indirect photons apart, at the scales it measures. Returns half the seconds a
 // whole splat takes.
 double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
-                              const PhotonSettings& passSettings, FixedFilm& sum, const std::function<bool()>& timeUp,
+                              const PhotonSettings& passSettings, FixedFilm& sum, const SplatTime& time,
                               std::vector<int64_t>* sums) {
+    const std::function<bool()> timeUp = time.timeUp();
     Timer t;
     coverage_.pass = uint64_t(pass);
     splat_.share = share.share;
@@ -307,7 +334,7 @@ double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassT
     if (probe) {
         KernelScaleProbeStep step(c_, targets, eye, splat_, totals_);
         const double photonsBefore = whole_.seconds() - photonsBegan_;  // traced, the other classes splatted
-        const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), timeUp, coveredIndirect);
+        const float m = step.run(indirect, passSettings, sum, whole_, whole_.seconds(), time, coveredIndirect);
         probeWidened_ = step.widened();
         nextPass_ = step.nextSeconds();
         if (c_.cfg.photonRoundsAuto()) rounds_ = chooseRounds(step.roundsPlan(), photonsBefore);
@@ -327,12 +354,12 @@ double SplatPasses::splatPass(int pass, int round, const PassShare& share, PassT
     return kWorthStarting * seconds / std::max(shares[kPhotonIndirect], 0.05);
 }
 
-// Whether the deadline has passed, asked after each portion of a splat (none without a time
-// limit). In a pass the ranks share, rank 0's clock decides for all of them.
-std::function<bool()> SplatPasses::timeUpFor(const PassShare& share, const Deadline& deadline) const {
+// Whether the deadline will have passed in so many seconds, asked after each portion of a splat
+// (none without a time limit). In a pass the ranks share, rank 0's clock decides for all of them.
+std::function<bool(double)> SplatPasses::lacksFor(const PassShare& share, const Deadline& deadline) const {
     if (!deadline.clock) return nullptr;
-    if (share.shares == 1) return [deadline] { return deadline.passed(); };
-    return [this, deadline] { return agreeOrStop(c_.ranks, deadline.passed()); };
+    if (share.shares == 1) return [deadline](double after) { return deadline.passed(after); };
+    return [this, deadline](double after) { return agreeOrStop(c_.ranks, deadline.passed(after)); };
 }
 
 // --photon: the replayed ray alone, as the full render splats it, and its record reported.

@@ -22,6 +22,7 @@
 namespace rs {
 
 class PassTargets;
+struct SplatTime;
 
 // The photons of a walkthrough's passes, kept across its frames (docs/design.md §12): a pass's
 // photons are traced once, with every kernel's coverage measured, and splatted into each frame
@@ -67,7 +68,10 @@ public:
     const double* nextSeconds() const { return &nextPass_; }
 
 private:
-    EyePass traceEye(int pass);
+    EyePass traceEye(int pass, const Deadline& deadline);
+    int firstFilmSpp(const Deadline& deadline) const;
+    // The share of the time left that the first pass's eye pass may take under a time limit.
+    static constexpr double kFirstEyeShare = 0.5;
     // The film samples beyond D that pass `pass` takes a pixel: the first pass's choice, from pass 1 on.
     const std::vector<uint16_t>* extraFilmOf(int pass) const { return pass > 0 && !extraFilm_.empty() ? &extraFilm_ : nullptr; }
     float receiverSpacing(int pass) const;
@@ -78,9 +82,8 @@ private:
     int chooseRounds(PhotonRoundsPlan plan, double photonsBefore);
     // `sums`: where the indirect photons' receivers' sums wait for the pass's gather (rounds).
     double splatPass(int pass, int round, const PassShare& share, PassTargets& targets, const EyePass& eye, PhotonMap photons,
-                     const PhotonSettings& passSettings, FixedFilm& sum, const std::function<bool()>& timeUp,
-                     std::vector<int64_t>* sums);
-    std::function<bool()> timeUpFor(const PassShare& share, const Deadline& deadline) const;
+                     const PhotonSettings& passSettings, FixedFilm& sum, const SplatTime& time, std::vector<int64_t>* sums);
+    std::function<bool(double)> lacksFor(const PassShare& share, const Deadline& deadline) const;
     void replayRay(PhotonMap& photons, const PhotonSettings& passSettings);
     void report();
 

@@ -268,6 +268,21 @@ TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
 // filmExtraSamples (eye.h): an image whose film is spread evenly takes no extra samples; a
 // pixel whose spread stands far above the mean takes (kExtraMultiple − 1)·D; many such pixels
 // share the budget of kExtraShare · D a pixel.
+// Under a time limit the first pass's film is sized so that its eye pass fits the time left:
+// D where it fits, else halved (from the largest power of two below D) until it does, down to 2.
+TEST(FilmWithin, TheFilmShrinksByPowersOfTwoUntilTheEyePassFits) {
+    const EyePassCost cost{1.0, 3.0};  // seconds: the eye samples', a film of D's
+    EXPECT_EQ(filmSppWithin(cost, 5.0, 16), 16);
+    EXPECT_EQ(filmSppWithin(cost, 4.0, 16), 16);
+    EXPECT_EQ(filmSppWithin(cost, 3.0, 16), 8);  // 1 + 3 · 8/16 = 2.5
+    EXPECT_EQ(filmSppWithin(cost, 2.0, 16), 4);  // 1 + 3 · 4/16 = 1.75
+    EXPECT_EQ(filmSppWithin(cost, 0.5, 16), 2);  // nothing fits: the least
+    EXPECT_EQ(filmSppWithin(cost, -1.0, 16), 2);
+    EXPECT_EQ(filmSppWithin(cost, 3.0, 12), 8);  // 1 + 3 · 8/12 = 3
+    EXPECT_EQ(filmSppWithin(cost, 0.0, 2), 2);
+    EXPECT_EQ(filmSppWithin(cost, 0.0, 1), 1);
+}
+
 TEST(FilmExtra, SamplesGoWhereTheSpreadStandsOutWithinTheBudget) {
     const int d = 16;
     std::vector<float> even(1000, 0.3f);

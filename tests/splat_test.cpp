@@ -450,11 +450,12 @@ TEST(SplatRenderer, ReplayedPhotonsAddUpUnderTheKernelScaleProbe) { expectReplay
 
 // A time limit no pass can keep (here past as soon as the passes begin): the first pass stops
 // after its first portion of photons (whole paths), counts the share of each class's paths it
-// splatted, and its photon layers are that share's light over the share. Its eye pass is whole:
-// the direct layer is a whole pass's to the bit, and the indirect layer's mean is a whole
-// pass's (at kernel scale 1) within the noise of the photons splatted. `probe`: the pass
-// probes the kernel scale (docs/design.md §7), whose share of the indirect photons (half of
-// them, at two scales) stops at the deadline as the splat does.
+// splatted, and its photon layers are that share's light over the share. Its eye pass has
+// every eye sample and the least direct film (filmSppWithin): the direct layer is that of a pass
+// of 2 film samples to the bit, and the indirect layer's mean is a whole pass's (at kernel scale
+// 1) within the noise of the photons splatted. `probe`: the pass probes the kernel
+// scale (docs/design.md §7), whose share of the indirect photons (half of them, at two scales)
+// stops at the deadline as the splat does.
 void expectCutShortPass(bool probe, double tolerance) {
     const char* data = std::getenv("RAYSPLAT_DATA");
     if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
@@ -464,20 +465,30 @@ void expectCutShortPass(bool probe, double tolerance) {
     cfg.photons = 200000;
     cfg.kernelScale = 1.f;
     const RenderResult whole = render(scene, cfg, silentReporter());
+    const int directSpp = cfg.directSpp;
+    cfg.directSpp = 2;
+    const RenderResult film2 = render(scene, cfg, silentReporter());
+    cfg.directSpp = directSpp;
     cfg.kernelScale = probe ? 0.f : 1.f;
     cfg.passes = 0;
     cfg.timeLimit = 1e-6;
     ASSERT_EQ(cfg.probesKernelScale(), probe);
     const RenderResult cut = render(scene, cfg, silentReporter());
     EXPECT_EQ(cut.stats.count("passes"), 1.0);
-    if (probe) {
+    if (probe) {  // cut short: no scale chosen, the probed paths' light kept at 1
         EXPECT_EQ(cut.stats.count("kernel_probe_widened"), 0.0);
+        EXPECT_EQ(cut.stats.count("kernel_probe_cut"), 1.0);
+        EXPECT_EQ(cut.stats.count("kernel_scale"), 1.0);
     }
     const double share = cut.stats.count("photon_passes");
     ::testing::Test::RecordProperty("indirect_share", std::to_string(share));
     EXPECT_GT(share, 0.0);
     EXPECT_LT(share, 2.0 / PassTargets::kPortions) << "one portion of sixteen, to whole paths";
-    EXPECT_EQ(cut.film.layers[kDirect], whole.film.layers[kDirect]);
+    // The eye pass sized to the time left: its direct film at the least, 2 samples a pixel
+    // (of a whole pass's 16), the film of a pass of 2 to the bit.
+    EXPECT_EQ(cut.stats.count("first_pass_direct_spp"), 2.0);
+    EXPECT_EQ(cut.film.layers[kDirect], film2.film.layers[kDirect]);
+    EXPECT_NE(cut.film.layers[kDirect], whole.film.layers[kDirect]);
     const double ratio = layerMean(cut.film, kIndirect) / layerMean(whole.film, kIndirect);
     ::testing::Test::RecordProperty("indirect_mean_ratio", std::to_string(ratio));
     EXPECT_NEAR(ratio, 1.0, tolerance);

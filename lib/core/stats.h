@@ -50,7 +50,8 @@ private:
 struct Deadline {
     const Timer* clock = nullptr;
     double seconds = 0.0;
-    bool passed() const { return clock && clock->seconds() >= seconds; }
+    // Whether it has passed, or will have in `after` seconds.
+    bool passed(double after = 0.0) const { return clock && clock->seconds() + after >= seconds; }
 };
 
 }  // namespace rs

@@ -8,6 +8,7 @@
 #include "core/log.h"
 #include "core/parallel.h"
 #include "core/sampling.h"
+#include "core/stats.h"
 
 // -- The eye pass --------------------------------------------------------------------------
 
@@ -224,6 +225,45 @@ EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampl
         r = EyeSamples();
     }
     return out;
+}
+
+EyePassCost estimateEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
+                            const EyePassSettings& st, ThreadPool& pool) {
+    EyePassSettings pilot = st;
+    pilot.measureFilmNoise = pilot.measureFilmSpread = false;
+    Film film(st.width, st.height);
+    const EyePassTracer tracer(scene, accel, lights, camera, pilot, film);
+    const int rows = (st.height + EyePassCost::kPilotRows - 1) / EyePassCost::kPilotRows;
+    std::vector<double> parts(size_t(pool.size()) * 2, 0.0);  // per thread: receivers', film's seconds
+    Timer wall;
+    pool.parallelFor(rows, 1, [&](int64_t r0, int64_t r1, int thread) {
+        EyeSamples row;
+        for (int64_t r = r0; r < r1; ++r) {
+            const int y = int(r) * EyePassCost::kPilotRows;
+            for (int x = 0; x < st.width; ++x) {
+                Timer t;
+                tracer.receivers(x, y, row);
+                const double between = t.seconds();
+                tracer.directFilm(x, y, nullptr, nullptr);
+                parts[size_t(thread) * 2] += between;
+                parts[size_t(thread) * 2 + 1] += t.seconds() - between;
+            }
+            row = EyeSamples();
+        }
+    });
+    double receivers = 0.0, filmPart = 0.0;
+    for (size_t i = 0; i < parts.size(); i += 2) receivers += parts[i], filmPart += parts[i + 1];
+    EyePassCost cost;
+    const double whole = wall.seconds() * double(st.height) / double(rows), busy = receivers + filmPart;
+    if (busy > 0.0) cost.receivers = whole * receivers / busy, cost.film = whole * filmPart / busy;
+    return cost;
+}
+
+int filmSppWithin(const EyePassCost& cost, double budget, int directSpp) {
+    if (directSpp <= 2 || cost.receivers + cost.film <= budget) return directSpp;
+    int fits = 1 << int(std::floor(std::log2(double(directSpp - 1))));  // the largest power of two below D
+    while (fits > 2 && cost.receivers + cost.film * fits / directSpp > budget) fits /= 2;
+    return fits;
 }
 
 std::vector<uint16_t> filmExtraSamples(const std::vector<float>& spread, int directSpp, double* removed) {

@@ -82,4 +82,17 @@ struct EyePass {
 EyePass traceEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
                      const EyePassSettings& settings, ThreadPool& pool, Reporter& reporter);
 
+// What an eye pass of `settings` would take, in seconds: a pilot of one row in kPilotRows is
+// traced and timed, its samples thrown away. Under a time limit the first pass sizes its direct
+// film by it (splat_pass.cpp), so that an image larger than the limit allows still ends in time.
+struct EyePassCost {
+    static constexpr int kPilotRows = 64;
+    double receivers = 0.0, film = 0.0;  // the eye samples' part and the direct film's
+};
+EyePassCost estimateEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
+                            const EyePassSettings& settings, ThreadPool& pool);
+// The direct film's samples a pixel for an eye pass of `cost` (at D = directSpp) to fit `budget`
+// seconds: D where it fits, else the largest power of two below D that does, at least 2.
+int filmSppWithin(const EyePassCost& cost, double budget, int directSpp);
+
 }  // namespace rs

@@ -2,10 +2,12 @@
 #include "splat/irradiance.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/sampling.h"
+#include "core/stats.h"
 
 namespace rs {
 
@@ -216,37 +218,52 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
     return out;
 }
 
+namespace {
+
+// Eye sample i's receivers (in the 2×2×2 cells around it, which hold every point within the
+// spacing, half a cell): each sum of `slots` weighted into `sum` (its RGB), the weights' total
+// returned; 0 where the sample gathers nothing (glossy, black, or no receiver near).
+double gatherAt(const IrradianceReceivers& r, const EyeSamples& samples, size_t i,
+                const std::vector<const std::vector<int64_t>*>& slots, std::vector<double>& sum, Vec3& f) {
+    const uint32_t bsdf = samples.bsdf[i];
+    if (EyeSamples::isGlossy(bsdf)) return 0.0;
+    f = decodeRgb9e5(bsdf);
+    if (isBlack(f)) return 0.0;
+    const float invCell = 0.5f / r.spacing;
+    const Vec3 p = samples.position[i];
+    const Vec3 n = decodeUnit16(samples.normal[i]), g = decodeUnit16(samples.geomNormal[i]);
+    const int cx = cellCoordinate(p.x * invCell - 0.5f), cy = cellCoordinate(p.y * invCell - 0.5f),
+              cz = cellCoordinate(p.z * invCell - 0.5f);
+    std::fill(sum.begin(), sum.end(), 0.0);
+    double weights = 0.0;
+    for (int k = 0; k < 8; ++k) {
+        uint32_t begin, end;
+        cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
+        for (uint32_t s = begin; s < end; ++s) {
+            const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
+            if (w <= 0.f) continue;
+            weights += w;
+            for (size_t j = 0; j < slots.size(); ++j)
+                for (int c = 0; c < 3; ++c) sum[j * 3 + c] += double(w) * double((*slots[j])[size_t(s) * 3 + c]);
+        }
+    }
+    return weights > 0.0 ? weights : 0.0;
+}
+
+constexpr int64_t kGatherChunk = 4096;
+
+}  // namespace
+
 void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples,
                       const std::vector<const std::vector<int64_t>*>& slots, double fixedScale,
                       const std::vector<std::vector<int64_t>*>& pixels, ThreadPool& pool) {
     const size_t sums = slots.size();
-    const float invCell = 0.5f / r.spacing;
     const double toLight = 1.0 / fixedScale;
-    pool.parallelFor(int64_t(samples.size()), 4096, [&](int64_t b, int64_t e, int) {
+    pool.parallelFor(int64_t(samples.size()), kGatherChunk, [&](int64_t b, int64_t e, int) {
         std::vector<double> sum(sums * 3);  // per sum of slots: its RGB
+        Vec3 f;
         for (int64_t i = b; i < e; ++i) {
-            const uint32_t bsdf = samples.bsdf[size_t(i)];
-            if (EyeSamples::isGlossy(bsdf)) continue;
-            const Vec3 f = decodeRgb9e5(bsdf);
-            if (isBlack(f)) continue;
-            const Vec3 p = samples.position[size_t(i)];
-            const Vec3 n = decodeUnit16(samples.normal[size_t(i)]), g = decodeUnit16(samples.geomNormal[size_t(i)]);
-            // The 2×2×2 cells around p hold every point within the spacing (half a cell).
-            const int cx = cellCoordinate(p.x * invCell - 0.5f), cy = cellCoordinate(p.y * invCell - 0.5f),
-                      cz = cellCoordinate(p.z * invCell - 0.5f);
-            std::fill(sum.begin(), sum.end(), 0.0);
-            double weights = 0.0;
-            for (int k = 0; k < 8; ++k) {
-                uint32_t begin, end;
-                cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
-                for (uint32_t s = begin; s < end; ++s) {
-                    const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
-                    if (w <= 0.f) continue;
-                    weights += w;
-                    for (size_t j = 0; j < sums; ++j)
-                        for (int c = 0; c < 3; ++c) sum[j * 3 + c] += double(w) * double((*slots[j])[size_t(s) * 3 + c]);
-                }
-            }
+            const double weights = gatherAt(r, samples, size_t(i), slots, sum, f);
             if (!(weights > 0.0)) continue;
             const size_t at = size_t(samples.pixel[size_t(i)]) * 3;
             for (size_t j = 0; j < sums; ++j)
@@ -260,6 +277,26 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples,
         for (size_t k = 0; k < r.glossyPixel.size(); ++k)
             for (int c = 0; c < 3; ++c)
                 (*pixels[j])[size_t(r.glossyPixel[k]) * 3 + c] += (*slots[j])[(r.irradianceSlots + k) * 3 + c];
+}
+
+double gatherSeconds(const IrradianceReceivers& r, const EyeSamples& samples, ThreadPool& pool) {
+    constexpr int64_t kStride = 16;
+    const std::vector<int64_t> none(size_t(r.slots()) * 3, 0);
+    const std::vector<const std::vector<int64_t>*> slots{&none};
+    const int64_t chunks = (int64_t(samples.size()) + kGatherChunk - 1) / kGatherChunk;
+    const int64_t timed = (chunks + kStride - 1) / kStride;
+    std::atomic<int64_t> gathered{0};
+    Timer t;
+    pool.parallelFor(timed, 1, [&](int64_t b, int64_t e, int) {
+        std::vector<double> sum(3);
+        Vec3 f;
+        int64_t n = 0;
+        for (int64_t k = b; k < e; ++k)
+            for (int64_t i = k * kStride * kGatherChunk, end = std::min(int64_t(samples.size()), i + kGatherChunk); i < end; ++i)
+                n += gatherAt(r, samples, size_t(i), slots, sum, f) > 0.0;
+        gathered += n;
+    });
+    return timed > 0 ? t.seconds() * double(chunks) / double(timed) : 0.0;
 }
 
 }  // namespace rs

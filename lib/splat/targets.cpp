@@ -35,9 +35,14 @@ uint64_t PassTargets::splat(const PhotonMap& photons, const SplatSettings& setti
             break;
         }
     }
-    if (!sums) gather({&slots}, {&part}, settings);
+    // Without indirect photons (the first pass's others, beside its probe) the slots hold nothing.
+    const bool landsOnReceivers = std::any_of(photons.rays.begin(), photons.rays.end(),
+                                              [](const PhotonRay& r) { return r.cls == kPhotonIndirect; });
+    if (!sums && landsOnReceivers) gather({&slots}, {&part}, settings);
     return covered;
 }
+
+double PassTargets::gatherSeconds() const { return sparse_ ? rs::gatherSeconds(receivers_, samples_, pool_) : 0.0; }
 
 void PassTargets::land(const PhotonMap& photons, const SplatSettings& settings, FixedFilm& part, std::vector<int64_t>& slots,
                        SplatStats* stats, CoverageStats* coverage) const {

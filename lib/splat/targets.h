@@ -41,6 +41,10 @@ public:
 
     static constexpr size_t kPortions = 16, kPortion = 4096;
 
+    // The seconds a gather of the receivers takes (gatherSeconds in irradiance.h; 0 without
+    // sparse receivers): under a time limit the splat stops that long before the deadline.
+    double gatherSeconds() const;
+
     // splat() in two steps, for several photon maps whose receivers are searched once: land()
     // adds `photons`' light to `part`'s photon layers, the indirect photons' on sparse receivers
     // to `slots` (the receivers' sums, sized here); gather() sums each `slots` at rank 0 in a
