@@ -46,6 +46,16 @@ ScrambledHalton::ScrambledHalton(uint64_t seed, int dimensions) : seed_(seed) {
         }
         zeros_.insert(zeros_.end(), zeros.begin(), zeros.end());
         powers_.insert(powers_.end(), powers.begin(), powers.end());
+        const uint16_t* perm = &perms_[offset_.back()];
+        if (b == 2)
+            for (int k = 0; k < nd; ++k) flips2_ |= uint64_t(perm[2 * k]) << (nd - 1 - k);
+        offsetPairs_.push_back(pairs_.size());
+        if (b == 2 || b > kMaxPairBase) continue;
+        for (int k = 0; k < nd; k += 2)
+            for (int d1 = 0; d1 < b; ++d1)
+                for (int d0 = 0; d0 < b; ++d0)
+                    pairs_.push_back(uint64_t(perm[size_t(k) * size_t(b) + size_t(d0)]) * powers[size_t(k) + 1] +
+                                     (k + 1 < nd ? uint64_t(perm[size_t(k + 1) * size_t(b) + size_t(d1)]) * powers[size_t(k) + 2] : 0));
     }
 }
 
@@ -73,6 +83,43 @@ uint64_t reverseDigits(Base base, uint64_t index, int digits, const uint16_t* pe
 template <uint64_t B>
 using Prime = std::integral_constant<uint64_t, B>;
 
+// The same integer as reverseDigits, two digits a step: `pairs` holds each pair's permuted
+// digits at their places, `zeros` the permuted zeros past the index's own digits.
+template <uint64_t B>
+uint64_t reversePairs(uint64_t index, int digits, const uint64_t* pairs, const uint64_t* zeros) {
+    constexpr uint64_t bb = B * B;
+    uint64_t sum = 0;
+    int k = 0;
+    for (; k < digits && index != 0; k += 2) {
+        const uint64_t next = index / bb;
+        sum += pairs[size_t(k / 2) * bb + (index - next * bb)];
+        index = next;
+    }
+    return sum + zeros[std::min(k, digits)];
+}
+
+uint64_t reversePairs(uint64_t b, uint64_t index, int digits, const uint64_t* pairs, const uint64_t* zeros) {
+    switch (b) {
+        case 3: return reversePairs<3>(index, digits, pairs, zeros);
+        case 5: return reversePairs<5>(index, digits, pairs, zeros);
+        case 7: return reversePairs<7>(index, digits, pairs, zeros);
+        case 11: return reversePairs<11>(index, digits, pairs, zeros);
+        case 13: return reversePairs<13>(index, digits, pairs, zeros);
+        case 17: return reversePairs<17>(index, digits, pairs, zeros);
+        case 19: return reversePairs<19>(index, digits, pairs, zeros);
+        case 23: return reversePairs<23>(index, digits, pairs, zeros);
+        case 29: return reversePairs<29>(index, digits, pairs, zeros);
+        default: return reversePairs<31>(index, digits, pairs, zeros);
+    }
+}
+
+uint64_t reverseBits(uint64_t x) {
+    x = (x >> 1 & 0x5555555555555555ull) | (x & 0x5555555555555555ull) << 1;
+    x = (x >> 2 & 0x3333333333333333ull) | (x & 0x3333333333333333ull) << 2;
+    x = (x >> 4 & 0x0f0f0f0f0f0f0f0full) | (x & 0x0f0f0f0f0f0f0f0full) << 4;
+    return __builtin_bswap64(x);
+}
+
 uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm, const uint64_t* zeros,
                        const uint64_t* powers) {
     switch (b) {
@@ -95,8 +142,15 @@ uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* p
 
 float ScrambledHalton::sample(uint64_t index, int dim) const {
     if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
-    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]],
-                                            &zeros_[offsetM_[dim]], &powers_[offsetM_[dim]]);
+    const int b = bases_[dim], digits = digits_[dim];
+    uint64_t reversed;
+    if (b == 2)  // 62 digits: the index's bits 0…61 reversed
+        reversed = (reverseBits(index) >> (64 - digits)) ^ flips2_;
+    else if (b <= kMaxPairBase)
+        reversed = reversePairs(uint64_t(b), index, digits, &pairs_[offsetPairs_[dim]], &zeros_[offsetM_[dim]]);
+    else
+        reversed = reverseDigits(uint64_t(b), index, digits, &perms_[offset_[dim]], &zeros_[offsetM_[dim]],
+                                 &powers_[offsetM_[dim]]);
     return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
 }
 

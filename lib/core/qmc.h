@@ -27,6 +27,14 @@ private:
     // (powers_, bases_[d]^(digits − m)); indexed from offsetM_[d].
     std::vector<uint64_t> zeros_, powers_;
     std::vector<size_t> offsetM_;
+    // The same integers, faster. Base 2: each digit's permutation keeps it or flips it, so the
+    // reversed digits are the index's bits reversed, XOR the flips. Bases 3 to kMaxPairBase: two
+    // digits at a time, each pair's permuted digits at their places in pairs_ (pair j's b² values
+    // from offsetPairs_[d] + j·b²).
+    static constexpr int kMaxPairBase = 31;
+    uint64_t flips2_ = 0;
+    std::vector<uint64_t> pairs_;
+    std::vector<size_t> offsetPairs_;
 };
 
 }  // namespace rs
