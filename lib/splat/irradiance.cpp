@@ -220,11 +220,23 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
 
 namespace {
 
+// The receivers' runs of the 2×2×2 cells from (x, y, z): the samples a thread gathers in turn
+// lie mostly in the same cells (the tree's order), which are then looked up once.
+struct CellRuns {
+    int x = INT32_MIN, y = 0, z = 0;
+    uint32_t begin[8], end[8];
+    void at(const IrradianceReceivers& r, int cx, int cy, int cz) {
+        if (cx == x && cy == y && cz == z) return;
+        x = cx, y = cy, z = cz;
+        for (int k = 0; k < 8; ++k) cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin[k], end[k]);
+    }
+};
+
 // Eye sample i's receivers (in the 2×2×2 cells around it, which hold every point within the
 // spacing, half a cell): each sum of `slots` weighted into `sum` (its RGB), the weights' total
 // returned; 0 where the sample gathers nothing (glossy, black, or no receiver near).
 double gatherAt(const IrradianceReceivers& r, const EyeSamples& samples, size_t i,
-                const std::vector<const std::vector<int64_t>*>& slots, std::vector<double>& sum, Vec3& f) {
+                const std::vector<const std::vector<int64_t>*>& slots, std::vector<double>& sum, Vec3& f, CellRuns& cells) {
     const uint32_t bsdf = samples.bsdf[i];
     if (EyeSamples::isGlossy(bsdf)) return 0.0;
     f = decodeRgb9e5(bsdf);
@@ -236,10 +248,9 @@ double gatherAt(const IrradianceReceivers& r, const EyeSamples& samples, size_t 
               cz = cellCoordinate(p.z * invCell - 0.5f);
     std::fill(sum.begin(), sum.end(), 0.0);
     double weights = 0.0;
+    cells.at(r, cx, cy, cz);
     for (int k = 0; k < 8; ++k) {
-        uint32_t begin, end;
-        cellRun(r, cellKey(cx + (k & 1), cy + (k >> 1 & 1), cz + (k >> 2)), begin, end);
-        for (uint32_t s = begin; s < end; ++s) {
+        for (uint32_t s = cells.begin[k]; s < cells.end[k]; ++s) {
             const float w = receiverWeight(p, n, g, r.position[s], r.normal[s], r.geomNormal[s], r.spacing);
             if (w <= 0.f) continue;
             weights += w;
@@ -262,8 +273,9 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples,
     pool.parallelFor(int64_t(samples.size()), kGatherChunk, [&](int64_t b, int64_t e, int) {
         std::vector<double> sum(sums * 3);  // per sum of slots: its RGB
         Vec3 f;
+        CellRuns cells;
         for (int64_t i = b; i < e; ++i) {
-            const double weights = gatherAt(r, samples, size_t(i), slots, sum, f);
+            const double weights = gatherAt(r, samples, size_t(i), slots, sum, f, cells);
             if (!(weights > 0.0)) continue;
             const size_t at = size_t(samples.pixel[size_t(i)]) * 3;
             for (size_t j = 0; j < sums; ++j)
@@ -290,10 +302,11 @@ double gatherSeconds(const IrradianceReceivers& r, const EyeSamples& samples, Th
     pool.parallelFor(timed, 1, [&](int64_t b, int64_t e, int) {
         std::vector<double> sum(3);
         Vec3 f;
+        CellRuns cells;
         int64_t n = 0;
         for (int64_t k = b; k < e; ++k)
             for (int64_t i = k * kStride * kGatherChunk, end = std::min(int64_t(samples.size()), i + kGatherChunk); i < end; ++i)
-                n += gatherAt(r, samples, size_t(i), slots, sum, f) > 0.0;
+                n += gatherAt(r, samples, size_t(i), slots, sum, f, cells) > 0.0;
         gathered += n;
     });
     return timed > 0 ? t.seconds() * double(chunks) / double(timed) : 0.0;
