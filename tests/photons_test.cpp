@@ -51,6 +51,19 @@ TEST(ScrambledHalton, FirstPointsAreStratifiedPerDimension) {
     EXPECT_NE(h.sample(5, 0), other.sample(5, 0));  // the seed scrambles
 }
 
+// sample()'s shortcuts give the digit-by-digit numbers: every dimension with a shortcut and
+// one past them, small indices and large ones (up to 2^64).
+TEST(ScrambledHalton, ShortcutsGiveTheDigitByDigitNumbers) {
+    ScrambledHalton h(7, 13);
+    uint64_t x = 0x9e3779b97f4a7c15ull;
+    for (int i = 0; i < 20000; ++i) {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        const uint64_t index = i < 10000 ? uint64_t(i) : x >> (x % 64);
+        for (int dim = 0; dim < 13; ++dim)
+            ASSERT_EQ(h.sample(index, dim), h.sampleByDigits(index, dim)) << "index " << index << ", dim " << dim;
+    }
+}
+
 // Every path's first segment ends on a wall: the direct photons carry exactly the emitted
 // power; the indirect ones carry Φ·ρ/(1−ρ) (every later bounce, summed) up to noise.
 TEST(PhotonTracer, ClosedRoomConservesEnergy) {

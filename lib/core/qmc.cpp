@@ -141,7 +141,7 @@ uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* p
 }  // namespace
 
 float ScrambledHalton::sample(uint64_t index, int dim) const {
-    if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
+    if (dim >= dimensions()) return sampleByDigits(index, dim);
     const int b = bases_[dim], digits = digits_[dim];
     uint64_t reversed;
     if (b == 2)  // 62 digits: the index's bits 0…61 reversed
@@ -151,6 +151,13 @@ float ScrambledHalton::sample(uint64_t index, int dim) const {
     else
         reversed = reverseDigits(uint64_t(b), index, digits, &perms_[offset_[dim]], &zeros_[offsetM_[dim]],
                                  &powers_[offsetM_[dim]]);
+    return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
+}
+
+float ScrambledHalton::sampleByDigits(uint64_t index, int dim) const {
+    if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
+    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]],
+                                            &zeros_[offsetM_[dim]], &powers_[offsetM_[dim]]);
     return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
 }
 

@@ -15,6 +15,9 @@ public:
     ScrambledHalton(uint64_t seed, int dimensions);
     int dimensions() const { return int(bases_.size()); }
     float sample(uint64_t index, int dim) const;
+    // The same number, one permuted digit at a time: what sample()'s shortcuts (bit reversal
+    // for base 2, two digits a step up to kMaxPairBase) are checked against.
+    float sampleByDigits(uint64_t index, int dim) const;
 
 private:
     uint64_t seed_;
