@@ -59,6 +59,9 @@ LightSampler::LightSampler(const Scene& scene, const Environment* environment) :
         entries_.push_back({Kind::Environment, 0, power});
     }
     onlyPunctual_ = std::all_of(entries_.begin(), entries_.end(), [](const Entry& e) { return e.kind == Kind::Punctual; });
+    emissionPlaces_ = !std::all_of(entries_.begin(), entries_.end(), [&](const Entry& e) {
+        return e.kind == Kind::Punctual && scene.lights[e.index].type != LightType::Directional;
+    });
     for (const Entry& e : entries_) {
         if (e.kind != Kind::Area) continue;
         const Vec3* v = &scene.positions[3 * e.index];

@@ -50,6 +50,10 @@ public:
     // With light portals (Scene::portals), photons of directional lights and of the environment
     // cross a portal: a point on them chosen by area projected across the photon's direction.
     EmissionSample sampleEmission(float uChoice, Vec2 uPos, Vec2 uDir) const;
+    // Which of those numbers it reads: the choice only where there are several lights, the
+    // position but for point and spot lights alone. A photon tracer need not draw the others.
+    bool emissionChooses() const { return cdf_.size() > 1; }
+    bool emissionPlaces() const { return emissionPlaces_; }
     bool hasPortals() const { return !portals_.empty(); }
     // Whether direct light at `p` on a surface (`glossy`: with a GGX lobe) also takes BSDF-sampled
     // rays, MIS-weighted against the light samples (docs/design.md §4). Not where no ray can meet
@@ -110,6 +114,7 @@ private:
     Vec3 sceneCenter_;
     float sceneRadius_ = 1.f;
     bool onlyPunctual_ = false;
+    bool emissionPlaces_ = true;  // sampleEmission reads uPos
     std::vector<glm::vec4> emitterSpheres_;  // each emissive triangle's centroid and kNearEmitter × its reach
 };
 

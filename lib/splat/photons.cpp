@@ -66,7 +66,10 @@ struct Traced {
 void tracePath(const Scene& scene, const RayAccel& accel, const LightSampler& lights, const ScrambledHalton& qmc,
                const PhotonSettings& st, uint64_t n, const bool open[kPhotonClassCount], std::vector<PhotonRay>& out) {
     auto u = [&](int dim) { return qmc.sample(n - st.firstPath, dim); };
-    EmissionSample e = lights.sampleEmission(u(0), {u(1), u(2)}, {u(3), u(4)});
+    // Dimensions 0–2 drawn only where they are read (one point light: neither).
+    const float uChoice = lights.emissionChooses() ? u(0) : 0.f;
+    const Vec2 uPos = lights.emissionPlaces() ? Vec2(u(1), u(2)) : Vec2(0.f);
+    EmissionSample e = lights.sampleEmission(uChoice, uPos, {u(3), u(4)});
     if (!(e.choiceProb > 0.f) || isBlack(e.flux)) return;
 
     Vec3 flux = e.flux, o = e.origin, d = e.dir;
