@@ -225,7 +225,7 @@ void addSamplingOptions(Command& cmd, RenderConfig& cfg, const RenderDefaults& d
                                   ", each new eye samples and photons; path " + std::to_string(d.path.passCount()) +
                                   " of --spp; 0: the method's)",
              [&](const std::string& v) { cfg.passes = parseCount<int>("--passes", v); }});
-    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one, counted from the first pass: loading and the grid come before it), instead of --passes; the first pass's direct film takes fewer samples where its eye pass would not fit half the time; with --frames, each frame's time",
+    cmd.add({"--time-limit", "SECONDS", "render passes until the time is up (at least one, counted from the first pass: loading and the grid come before it), instead of --passes; the first pass takes fewer film samples a pixel (and then fewer eye samples) where its eye pass would not fit half the time; with --frames, each frame's time",
              [&](const std::string& v) { cfg.timeLimit = parseFloat("--time-limit", v); }});
     cmd.add({"--film-passes", "N",
              "after the passes, N passes of the direct film alone: its camera samples for direct light, emission, albedo and "

@@ -147,7 +147,10 @@ EyePass SplatPasses::traceEye(int pass, const Deadline& deadline) {
     eye_.measureFilmSpread = pass == 0 && probing_ && eye_.directSpp >= 2;
     eye_.extraFilm = extraFilmOf(pass);
     EyePassSettings settings = eye_;
-    if (pass == 0) settings.directSpp = firstFilmSpp(deadline);
+    if (pass == 0) {
+        const EyePassSize size = firstEyePass(deadline);
+        settings.spp = size.spp, settings.directSpp = size.directSpp;
+    }
     EyePass eye = traceEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, settings, c_.pool, c_.reporter);
     // The film's noise as a film of D samples would have it (the passes' rounds weigh that).
     const float smaller = eye_.directSpp > 0 ? float(settings.directSpp) / float(eye_.directSpp) : 1.f;
@@ -165,23 +168,26 @@ EyePass SplatPasses::traceEye(int pass, const Deadline& deadline) {
     return eye;
 }
 
-// Under a time limit, the first pass's direct film: D samples a pixel where the eye pass fits a
-// share of the time left (by estimateEyePass), else fewer (filmSppWithin). Rank 0 chooses for
-// every rank. Without a limit, D.
-int SplatPasses::firstFilmSpp(const Deadline& deadline) const {
-    const int d = eye_.directSpp;
-    if (!deadline.clock || d < 4) return d;
-    double spp = d;
+// Under a time limit, the first pass's camera samples a pixel: S and D where its eye pass fits a
+// share of the time left (by estimateEyePass), else fewer (eyePassWithin). Rank 0 chooses for
+// every rank. Without a limit, S and D.
+EyePassSize SplatPasses::firstEyePass(const Deadline& deadline) const {
+    EyePassSize size{eye_.spp, eye_.directSpp};
+    if (!deadline.clock) return size;
+    double chosen[2] = {double(size.spp), double(size.directSpp)};
     if (c_.ranks.rank() == 0) {
         const EyePassCost cost = estimateEyePass(c_.scene, c_.accel, &c_.lights, c_.camera, eye_, c_.pool);
-        spp = filmSppWithin(cost, kFirstEyeShare * (deadline.seconds - deadline.clock->seconds()), d);
+        const EyePassSize fits = eyePassWithin(cost, kFirstEyeShare * (deadline.seconds - deadline.clock->seconds()),
+                                               size.spp, size.directSpp);
+        chosen[0] = fits.spp, chosen[1] = fits.directSpp;
     }
-    c_.ranks.broadcast(&spp, 1);
-    c_.stats.setCount("first_pass_direct_spp", spp);
-    if (int(spp) < d)
-        c_.reporter.info("the first pass's direct film at " + std::to_string(int(spp)) +
-                         " samples a pixel, for its eye pass to fit the time limit");
-    return int(spp);
+    c_.ranks.broadcast(chosen, 2);
+    c_.stats.setCount("first_pass_spp", chosen[0]);
+    c_.stats.setCount("first_pass_direct_spp", chosen[1]);
+    if (int(chosen[0]) < size.spp || int(chosen[1]) < size.directSpp)
+        c_.reporter.info("the first pass at " + std::to_string(int(chosen[0])) + " eye and " + std::to_string(int(chosen[1])) +
+                         " film samples a pixel, for its eye pass to fit the time limit");
+    return EyePassSize{int(chosen[0]), int(chosen[1])};
 }
 
 double SplatPasses::renderFilm(int pass, FixedFilm& sum) {

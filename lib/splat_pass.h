@@ -69,7 +69,7 @@ public:
 
 private:
     EyePass traceEye(int pass, const Deadline& deadline);
-    int firstFilmSpp(const Deadline& deadline) const;
+    EyePassSize firstEyePass(const Deadline& deadline) const;
     // The share of the time left that the first pass's eye pass may take under a time limit.
     static constexpr double kFirstEyeShare = 0.5;
     // The film samples beyond D that pass `pass` takes a pixel: the first pass's choice, from pass 1 on.

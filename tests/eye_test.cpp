@@ -268,19 +268,26 @@ TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
 // filmExtraSamples (eye.h): an image whose film is spread evenly takes no extra samples; a
 // pixel whose spread stands far above the mean takes (kExtraMultiple − 1)·D; many such pixels
 // share the budget of kExtraShare · D a pixel.
-// Under a time limit the first pass's film is sized so that its eye pass fits the time left:
-// D where it fits, else halved (from the largest power of two below D) until it does, down to 2.
-TEST(FilmWithin, TheFilmShrinksByPowersOfTwoUntilTheEyePassFits) {
-    const EyePassCost cost{1.0, 3.0};  // seconds: the eye samples', a film of D's
-    EXPECT_EQ(filmSppWithin(cost, 5.0, 16), 16);
-    EXPECT_EQ(filmSppWithin(cost, 4.0, 16), 16);
-    EXPECT_EQ(filmSppWithin(cost, 3.0, 16), 8);  // 1 + 3 · 8/16 = 2.5
-    EXPECT_EQ(filmSppWithin(cost, 2.0, 16), 4);  // 1 + 3 · 4/16 = 1.75
-    EXPECT_EQ(filmSppWithin(cost, 0.5, 16), 2);  // nothing fits: the least
-    EXPECT_EQ(filmSppWithin(cost, -1.0, 16), 2);
-    EXPECT_EQ(filmSppWithin(cost, 3.0, 12), 8);  // 1 + 3 · 8/12 = 3
-    EXPECT_EQ(filmSppWithin(cost, 0.0, 2), 2);
-    EXPECT_EQ(filmSppWithin(cost, 0.0, 1), 1);
+// Under a time limit the first pass's eye pass is sized to fit the time left: S eye samples and
+// D film samples where they fit, else the film halved (from the largest power of two below D)
+// down to 2, then the eye samples down to 1.
+TEST(EyePassWithin, TheFilmShrinksFirstThenTheEyeSamples) {
+    const EyePassCost cost{1.0, 3.0};  // seconds: S = 4 eye samples', a film of D's
+    const auto size = [&](double budget, int spp, int d) {
+        const EyePassSize s = eyePassWithin(cost, budget, spp, d);
+        return std::pair{s.spp, s.directSpp};
+    };
+    EXPECT_EQ(size(5.0, 4, 16), std::pair(4, 16));
+    EXPECT_EQ(size(4.0, 4, 16), std::pair(4, 16));
+    EXPECT_EQ(size(3.0, 4, 16), std::pair(4, 8));   // 1 + 3 · 8/16 = 2.5
+    EXPECT_EQ(size(2.0, 4, 16), std::pair(4, 4));   // 1 + 3 · 4/16 = 1.75
+    EXPECT_EQ(size(1.4, 4, 16), std::pair(4, 2));   // 1 + 3 · 2/16 = 1.375
+    EXPECT_EQ(size(1.3, 4, 16), std::pair(2, 2));   // over 1.3: then 2 eye samples, ½ + 3/8
+    EXPECT_EQ(size(0.5, 4, 16), std::pair(1, 2));   // nothing fits: the least
+    EXPECT_EQ(size(-1.0, 4, 16), std::pair(1, 2));
+    EXPECT_EQ(size(3.0, 4, 12), std::pair(4, 8));   // 1 + 3 · 8/12 = 3
+    EXPECT_EQ(size(0.0, 1, 2), std::pair(1, 2));
+    EXPECT_EQ(size(0.0, 3, 1), std::pair(1, 1));    // the largest power of two below 3, then 1
 }
 
 TEST(FilmExtra, SamplesGoWhereTheSpreadStandsOutWithinTheBudget) {

@@ -451,7 +451,7 @@ TEST(SplatRenderer, ReplayedPhotonsAddUpUnderTheKernelScaleProbe) { expectReplay
 // A time limit no pass can keep (here past as soon as the passes begin): the first pass stops
 // after its first portion of photons (whole paths), counts the share of each class's paths it
 // splatted, and its photon layers are that share's light over the share. Its eye pass has
-// every eye sample and the least direct film (filmSppWithin): the direct layer is that of a pass
+// the least eye samples and direct film (eyePassWithin): the direct layer is that of a pass
 // of 2 film samples to the bit, and the indirect layer's mean is a whole pass's (at kernel scale
 // 1) within the noise of the photons splatted. `probe`: the pass probes the kernel
 // scale (docs/design.md §7), whose share of the indirect photons (half of them, at two scales)
@@ -485,8 +485,9 @@ void expectCutShortPass(bool probe, double tolerance) {
     EXPECT_GT(share, 0.0);
     EXPECT_LT(share, 2.0 / PassTargets::kPortions) << "one portion of sixteen, to whole paths";
     // The eye pass sized to the time left: its direct film at the least, 2 samples a pixel
-    // (of a whole pass's 16), the film of a pass of 2 to the bit.
+    // (of a whole pass's 16), the film of a pass of 2 to the bit, and 1 eye sample (of 4).
     EXPECT_EQ(cut.stats.count("first_pass_direct_spp"), 2.0);
+    EXPECT_EQ(cut.stats.count("first_pass_spp"), 1.0);
     EXPECT_EQ(cut.film.layers[kDirect], film2.film.layers[kDirect]);
     EXPECT_NE(cut.film.layers[kDirect], whole.film.layers[kDirect]);
     const double ratio = layerMean(cut.film, kIndirect) / layerMean(whole.film, kIndirect);

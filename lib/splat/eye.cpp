@@ -259,11 +259,17 @@ EyePassCost estimateEyePass(const Scene& scene, const RayAccel& accel, const Lig
     return cost;
 }
 
-int filmSppWithin(const EyePassCost& cost, double budget, int directSpp) {
-    if (directSpp <= 2 || cost.receivers + cost.film <= budget) return directSpp;
-    int fits = 1 << int(std::floor(std::log2(double(directSpp - 1))));  // the largest power of two below D
-    while (fits > 2 && cost.receivers + cost.film * fits / directSpp > budget) fits /= 2;
-    return fits;
+EyePassSize eyePassWithin(const EyePassCost& cost, double budget, int spp, int directSpp) {
+    EyePassSize size{spp, directSpp};
+    const auto fits = [&] {
+        return cost.receivers * size.spp / std::max(spp, 1) + cost.film * size.directSpp / std::max(directSpp, 1) <= budget;
+    };
+    const auto powerBelow = [](int n) { return 1 << int(std::floor(std::log2(double(n - 1)))); };
+    if (directSpp > 2 && !fits())
+        for (size.directSpp = powerBelow(directSpp); size.directSpp > 2 && !fits();) size.directSpp /= 2;
+    if (spp > 1 && !fits())
+        for (size.spp = powerBelow(spp); size.spp > 1 && !fits();) size.spp /= 2;
+    return size;
 }
 
 std::vector<uint16_t> filmExtraSamples(const std::vector<float>& spread, int directSpp, double* removed) {

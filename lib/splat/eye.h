@@ -91,8 +91,13 @@ struct EyePassCost {
 };
 EyePassCost estimateEyePass(const Scene& scene, const RayAccel& accel, const LightSampler* lights, const Camera& camera,
                             const EyePassSettings& settings, ThreadPool& pool);
-// The direct film's samples a pixel for an eye pass of `cost` (at D = directSpp) to fit `budget`
-// seconds: D where it fits, else the largest power of two below D that does, at least 2.
-int filmSppWithin(const EyePassCost& cost, double budget, int directSpp);
+// The camera samples a pixel of an eye pass of `cost` (at S = spp eye samples and D = directSpp
+// film samples) that fit `budget` seconds: S and D where they fit; else the film's, halved from
+// the largest power of two below D, down to 2; then, where that is not enough, the eye
+// samples', so, down to 1.
+struct EyePassSize {
+    int spp = 0, directSpp = 0;
+};
+EyePassSize eyePassWithin(const EyePassCost& cost, double budget, int spp, int directSpp);
 
 }  // namespace rs
