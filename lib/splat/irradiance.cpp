@@ -293,14 +293,13 @@ void gatherIrradiance(const IrradianceReceivers& r, const EyeSamples& samples,
 
 double gatherSeconds(const IrradianceReceivers& r, const EyeSamples& samples, ThreadPool& pool) {
     constexpr int64_t kStride = 16;
-    const std::vector<int64_t> none(size_t(r.slots()) * 3, 0);
-    const std::vector<const std::vector<int64_t>*> slots{&none};
+    const std::vector<const std::vector<int64_t>*> slots;  // no sums: the search and the weights alone
     const int64_t chunks = (int64_t(samples.size()) + kGatherChunk - 1) / kGatherChunk;
     const int64_t timed = (chunks + kStride - 1) / kStride;
     std::atomic<int64_t> gathered{0};
     Timer t;
     pool.parallelFor(timed, 1, [&](int64_t b, int64_t e, int) {
-        std::vector<double> sum(3);
+        std::vector<double> sum;
         Vec3 f;
         CellRuns cells;
         int64_t n = 0;

@@ -81,8 +81,8 @@ IrradianceReceivers chooseReceivers(const EyeSamples& samples, int width, int he
 void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& samples,
                       const std::vector<const std::vector<int64_t>*>& slots, double fixedScale,
                       const std::vector<std::vector<int64_t>*>& pixels, ThreadPool& pool);
-// The seconds gatherIrradiance takes over `samples`: one chunk of samples in sixteen gathered
-// (from empty slots, the result thrown away) and timed. A time limit's splat stops that long
+// The seconds gatherIrradiance takes over `samples`: one chunk of samples in sixteen searched
+// for their receivers and weighed (no sums read or written) and timed. A time limit's splat stops that long
 // before the deadline, so that its gather ends by it.
 double gatherSeconds(const IrradianceReceivers& receivers, const EyeSamples& samples, ThreadPool& pool);
 inline void gatherIrradiance(const IrradianceReceivers& receivers, const EyeSamples& samples, const std::vector<int64_t>& slots,
