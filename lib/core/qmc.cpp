@@ -85,9 +85,9 @@ using Prime = std::integral_constant<uint64_t, B>;
 
 // The same integer as reverseDigits, two digits a step: `pairs` holds each pair's permuted
 // digits at their places, `zeros` the permuted zeros past the index's own digits.
-template <uint64_t B>
-uint64_t reversePairs(uint64_t index, int digits, const uint64_t* pairs, const uint64_t* zeros) {
-    constexpr uint64_t bb = B * B;
+template <class Base>
+uint64_t reversePairs(Base base, uint64_t index, int digits, const uint64_t* pairs, const uint64_t* zeros) {
+    const uint64_t b = base, bb = b * b;
     uint64_t sum = 0;
     int k = 0;
     for (; k < digits && index != 0; k += 2) {
@@ -98,18 +98,22 @@ uint64_t reversePairs(uint64_t index, int digits, const uint64_t* pairs, const u
     return sum + zeros[std::min(k, digits)];
 }
 
-uint64_t reversePairs(uint64_t b, uint64_t index, int digits, const uint64_t* pairs, const uint64_t* zeros) {
+// f(Prime<b>()) for the primes up to 31, so that f's divisions by b are multiplications; else f(b).
+template <class F>
+uint64_t withBase(uint64_t b, F&& f) {
     switch (b) {
-        case 3: return reversePairs<3>(index, digits, pairs, zeros);
-        case 5: return reversePairs<5>(index, digits, pairs, zeros);
-        case 7: return reversePairs<7>(index, digits, pairs, zeros);
-        case 11: return reversePairs<11>(index, digits, pairs, zeros);
-        case 13: return reversePairs<13>(index, digits, pairs, zeros);
-        case 17: return reversePairs<17>(index, digits, pairs, zeros);
-        case 19: return reversePairs<19>(index, digits, pairs, zeros);
-        case 23: return reversePairs<23>(index, digits, pairs, zeros);
-        case 29: return reversePairs<29>(index, digits, pairs, zeros);
-        default: return reversePairs<31>(index, digits, pairs, zeros);
+        case 2: return f(Prime<2>());
+        case 3: return f(Prime<3>());
+        case 5: return f(Prime<5>());
+        case 7: return f(Prime<7>());
+        case 11: return f(Prime<11>());
+        case 13: return f(Prime<13>());
+        case 17: return f(Prime<17>());
+        case 19: return f(Prime<19>());
+        case 23: return f(Prime<23>());
+        case 29: return f(Prime<29>());
+        case 31: return f(Prime<31>());
+        default: return f(b);
     }
 }
 
@@ -118,24 +122,6 @@ uint64_t reverseBits(uint64_t x) {
     x = (x >> 2 & 0x3333333333333333ull) | (x & 0x3333333333333333ull) << 2;
     x = (x >> 4 & 0x0f0f0f0f0f0f0f0full) | (x & 0x0f0f0f0f0f0f0f0full) << 4;
     return __builtin_bswap64(x);
-}
-
-uint64_t reverseDigits(uint64_t b, uint64_t index, int digits, const uint16_t* perm, const uint64_t* zeros,
-                       const uint64_t* powers) {
-    switch (b) {
-        case 2: return reverseDigits(Prime<2>(), index, digits, perm, zeros, powers);
-        case 3: return reverseDigits(Prime<3>(), index, digits, perm, zeros, powers);
-        case 5: return reverseDigits(Prime<5>(), index, digits, perm, zeros, powers);
-        case 7: return reverseDigits(Prime<7>(), index, digits, perm, zeros, powers);
-        case 11: return reverseDigits(Prime<11>(), index, digits, perm, zeros, powers);
-        case 13: return reverseDigits(Prime<13>(), index, digits, perm, zeros, powers);
-        case 17: return reverseDigits(Prime<17>(), index, digits, perm, zeros, powers);
-        case 19: return reverseDigits(Prime<19>(), index, digits, perm, zeros, powers);
-        case 23: return reverseDigits(Prime<23>(), index, digits, perm, zeros, powers);
-        case 29: return reverseDigits(Prime<29>(), index, digits, perm, zeros, powers);
-        case 31: return reverseDigits(Prime<31>(), index, digits, perm, zeros, powers);
-        default: return reverseDigits<uint64_t>(b, index, digits, perm, zeros, powers);
-    }
 }
 
 }  // namespace
@@ -147,18 +133,23 @@ float ScrambledHalton::sample(uint64_t index, int dim) const {
     if (b == 2)  // 62 digits: the index's bits 0…61 reversed
         reversed = (reverseBits(index) >> (64 - digits)) ^ flips2_;
     else if (b <= kMaxPairBase)
-        reversed = reversePairs(uint64_t(b), index, digits, &pairs_[offsetPairs_[dim]], &zeros_[offsetM_[dim]]);
+        reversed = withBase(uint64_t(b), [&](auto base) {
+            return reversePairs(base, index, digits, &pairs_[offsetPairs_[dim]], &zeros_[offsetM_[dim]]);
+        });
     else
-        reversed = reverseDigits(uint64_t(b), index, digits, &perms_[offset_[dim]], &zeros_[offsetM_[dim]],
-                                 &powers_[offsetM_[dim]]);
+        reversed = sampleDigits(index, dim);
     return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
 }
 
 float ScrambledHalton::sampleByDigits(uint64_t index, int dim) const {
     if (dim >= dimensions()) return toUnitFloat(uint32_t(hashKey(seed_, Stage::Photon, index, uint64_t(dim)) >> 32));
-    const uint64_t reversed = reverseDigits(uint64_t(bases_[dim]), index, digits_[dim], &perms_[offset_[dim]],
-                                            &zeros_[offsetM_[dim]], &powers_[offsetM_[dim]]);
-    return std::min(float(double(reversed) * scales_[dim]), 0x1.fffffep-1f);
+    return std::min(float(double(sampleDigits(index, dim)) * scales_[dim]), 0x1.fffffep-1f);
+}
+
+uint64_t ScrambledHalton::sampleDigits(uint64_t index, int dim) const {
+    return withBase(uint64_t(bases_[dim]), [&](auto base) {
+        return reverseDigits(base, index, digits_[dim], &perms_[offset_[dim]], &zeros_[offsetM_[dim]], &powers_[offsetM_[dim]]);
+    });
 }
 
 }  // namespace rs

@@ -20,6 +20,8 @@ public:
     float sampleByDigits(uint64_t index, int dim) const;
 
 private:
+    uint64_t sampleDigits(uint64_t index, int dim) const;  // the reversed digits, one at a time
+
     uint64_t seed_;
     std::vector<int> bases_, digits_;
     std::vector<double> scales_;      // bases_[d]^−digits_[d]
