@@ -155,13 +155,19 @@ float KernelScaleProbeStep::run(const PhotonMap& indirect, const PhotonSettings&
         covered = UINT64_MAX;  // every path's indirect photons
         return m;
     }
+    covered = splatRest(indirect, share, m, ps, sum, timeUp);
+    return m;
+}
+
+uint64_t KernelScaleProbeStep::splatRest(const PhotonMap& indirect, size_t from, float m, const PhotonSettings& ps, FixedFilm& sum,
+                                         const std::function<bool()>& timeUp, std::vector<int64_t>* sums) {
     FixedFilm part;  // the splat's layers only
     part.width = c_.width, part.height = c_.height;
     for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
-    covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, share, n), kPhotonIndirect, m, ps), splat_, part,
-                             &totals_.splat, &totals_.coverage, timeUp);
+    const uint64_t covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, from, indirect.rays.size()), kPhotonIndirect, m, ps),
+                                            splat_, part, &totals_.splat, &totals_.coverage, timeUp, sums);
     sum.add(part);
-    return m;
+    return covered;
 }
 
 uint64_t KernelScaleProbeStep::cutShort(const PhotonMap& indirect, size_t probed, const PhotonSettings& ps, FixedFilm parts[4],
@@ -171,17 +177,11 @@ uint64_t KernelScaleProbeStep::cutShort(const PhotonMap& indirect, size_t probed
     std::vector<int64_t>& light = parts[0].buffers[kIndirect];
     for (size_t i = 0; i < values_; ++i) FixedFilm::addSaturating(light[i], parts[1].buffers[kIndirect][i]);
     uint64_t covered = probed < n ? indirect.rays[probed].path : UINT64_MAX;  // the paths before the first one not probed
-    FixedFilm part;  // the splat's layers only
-    part.width = c_.width, part.height = c_.height;
-    for (int l = 0; l < kProbeLayers; ++l) part.buffers[l].assign(values_, 0);
     // Where the whole share was probed with time left, the rest follow at scale 1 until the
     // deadline, onto the same receivers' sums.
-    if (probed < n && timeUp && !timeUp())
-        covered = targets_.splat(scaledKernels(c_.scene, slice(indirect, probed, n), kPhotonIndirect, 1.f, ps), splat_, part,
-                                 &totals_.splat, &totals_.coverage, timeUp, &slots[0]);
+    if (probed < n && timeUp && !timeUp()) covered = splatRest(indirect, probed, 1.f, ps, sum, timeUp, &slots[0]);
     targets_.gather({&slots[0]}, {&parts[0]}, splat_);
     keep(light, sum);
-    sum.add(part);
     c_.stats.setCount("kernel_probe_cut", 1);
     c_.stats.setCount("kernel_probe_widened", 0);
     return covered;

@@ -87,6 +87,10 @@ private:
     // the rest of the photons splatted at 1 onto the same receivers. Returns the paths covered.
     uint64_t cutShort(const PhotonMap& indirect, size_t probed, const PhotonSettings& ps, FixedFilm parts[4],
                       std::vector<int64_t> slots[4], FixedFilm& sum, const std::function<bool()>& timeUp);
+    // Photons [from, n) of `indirect` at scale m, splatted into `sum` until the deadline (with
+    // `sums`, their receivers' sums added there and not gathered). Returns the paths covered.
+    uint64_t splatRest(const PhotonMap& indirect, size_t from, float m, const PhotonSettings& ps, FixedFilm& sum,
+                       const std::function<bool()>& timeUp, std::vector<int64_t>* sums = nullptr);
     // The probed photons' light at the scale kept, into the pass.
     void keep(const std::vector<int64_t>& kept, FixedFilm& sum) const;
     // At rank 0: the probe from the summed halves, `share` the pass's indirect photons over theirs.
