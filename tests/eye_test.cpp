@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
+#include <string>
 
 #include "scene/accel.h"
 #include "scene/bsdf.h"
@@ -33,6 +35,24 @@ EyePassSettings filmOnly(int size) {
     st.directSamples = 1;
     st.directSpp = 16;
     return st;
+}
+
+// A scene of data/ with what an eye pass needs (two threads).
+struct EyeScene {
+    explicit EyeScene(const std::string& path) : scene(loadScene(path, silentReporter())), accel(scene, 2), lights(scene) {}
+    EyePass trace(const EyePassSettings& st) {
+        return traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
+    }
+    Scene scene;
+    RayAccel accel;
+    LightSampler lights;
+    ThreadPool pool{2};
+};
+
+// Null where RAYSPLAT_DATA is not set.
+std::unique_ptr<EyeScene> eyeScene(const char* name) {
+    const char* data = std::getenv("RAYSPLAT_DATA");
+    return data ? std::make_unique<EyeScene>(std::string(data) + "/" + name) : nullptr;
 }
 
 }  // namespace
@@ -234,20 +254,16 @@ TEST(EyePass, ThreadCountDoesNotChangeSamples) {
 // stratified samples' error falls faster than 1/N, so the estimate stands above the seeds'
 // (measured 1.9; halves of even and odd samples, which are not stratified alike, gave 23).
 TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
-    const char* data = std::getenv("RAYSPLAT_DATA");
-    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
-    Scene scene = loadScene(std::string(data) + "/cornell_box.gltf", silentReporter());
-    RayAccel accel(scene, 2);
-    LightSampler lights(scene);
-    ThreadPool pool(2);
+    const std::unique_ptr<EyeScene> scene = eyeScene("cornell_box.gltf");
+    if (!scene) GTEST_SKIP() << "RAYSPLAT_DATA not set";
     EyePassSettings st = filmOnly(64);
     st.measureFilmNoise = true;
     double estimated = 0.0, between = 0.0;
     for (uint64_t seed = 1; seed <= 8; seed += 2) {
         st.seed = seed;
-        const EyePass a = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
+        const EyePass a = scene->trace(st);
         st.seed = seed + 1;
-        const EyePass b = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
+        const EyePass b = scene->trace(st);
         ASSERT_EQ(a.filmNoise.size(), a.film.pixelCount());
         for (size_t p = 0; p < a.film.pixelCount(); ++p)
             for (int c = 0; c < 3; ++c) {
@@ -262,7 +278,7 @@ TEST(EyePass, FilmNoiseIsTheVarianceOfTheFilm) {
     EXPECT_GT(estimated, 1.0 * between);
     EXPECT_LT(estimated, 3.0 * between);
     st.measureFilmNoise = false;
-    EXPECT_TRUE(traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter()).filmNoise.empty());
+    EXPECT_TRUE(scene->trace(st).filmNoise.empty());
 }
 
 // filmExtraSamples (eye.h): an image whose film is spread evenly takes no extra samples; a
@@ -323,15 +339,11 @@ TEST(FilmExtra, SamplesGoWhereTheSpreadStandsOutWithinTheBudget) {
 // the pixels that take at least D more, the film's variance over eight seeds falls (measured
 // 0.39 of it without them); and the image's mean is the same within 0.2 %.
 TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
-    const char* data = std::getenv("RAYSPLAT_DATA");
-    if (!data) GTEST_SKIP() << "RAYSPLAT_DATA not set";
-    Scene scene = loadScene(std::string(data) + "/point_shadows.gltf", silentReporter());
-    RayAccel accel(scene, 2);
-    LightSampler lights(scene);
-    ThreadPool pool(2);
+    const std::unique_ptr<EyeScene> scene = eyeScene("point_shadows.gltf");
+    if (!scene) GTEST_SKIP() << "RAYSPLAT_DATA not set";
     EyePassSettings st = filmOnly(128);
     st.measureFilmSpread = true;
-    const EyePass first = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter());
+    const EyePass first = scene->trace(st);
     const std::vector<uint16_t> extra = filmExtraSamples(first.filmSpread, st.directSpp);
     size_t edges = 0, many = 0;
     for (uint16_t e : extra) edges += e > 0, many += e >= st.directSpp;
@@ -351,7 +363,7 @@ TEST(FilmExtra, ExtraSamplesTakeTheEdgesNoiseAway) {
         Film films[2];
         for (int k = 0; k < 2; ++k) {
             st.extraFilm = k ? &extra : nullptr;
-            films[k] = traceEyePass(scene, accel, &lights, scene.camera(), st, pool, silentReporter()).film;
+            films[k] = scene->trace(st).film;
         }
         for (size_t p = 0; p < n; ++p) {
             if (extra[p] == 0) {
