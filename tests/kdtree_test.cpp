@@ -10,6 +10,7 @@
 #include <random>
 #include <set>
 
+#include "occlusion/cylinder_index.h"
 #include "occlusion/kdtree.h"
 #include "occlusion/kdtree_traverse.h"
 
@@ -906,3 +907,49 @@ TEST(OcclusionTreeTraversal, ThinDoubleSidedSlabDoesNotShadowItsLitSide) {
     }
 }
 
+
+// The receivers' index returns every point inside a cylinder (depth in (begin, end], distance
+// from the axis below the radius, in double precision), each once, and nothing past a hundredth
+// of the radius outside it: points on planes, a thin rod and scattered, cylinders of every
+// direction (some along the axes, where the slabs divide by zero) and length.
+TEST(CylinderIndex, FindsEveryPointInsideAndLittleMore) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    std::vector<Vec3> points;
+    for (int i = 0; i < 3000; ++i) points.emplace_back(4.f * u(rng), 0.f, 3.f * u(rng));            // a floor
+    for (int i = 0; i < 2000; ++i) points.emplace_back(4.f, 2.5f * u(rng), 3.f * u(rng));           // a wall
+    for (int i = 0; i < 500; ++i) points.emplace_back(2.f + 0.01f * u(rng), 2.f * u(rng), 1.5f);    // a rod
+    for (int i = 0; i < 1003; ++i) points.emplace_back(4.f * u(rng), 2.5f * u(rng), 3.f * u(rng));  // anywhere
+    const CylinderIndex index(points);
+    int found = 0;
+    for (int q = 0; q < 2000; ++q) {
+        const Vec3 o(4.f * u(rng), 2.5f * u(rng), 3.f * u(rng));
+        Vec3 w(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f);
+        if (q % 7 == 0) w = Vec3(0.f), w[q % 3] = q % 2 ? 1.f : -1.f;
+        w = glm::normalize(w);
+        const float radius = 0.02f + 0.3f * u(rng), begin = -0.5f + u(rng), end = begin + 4.f * u(rng);
+        std::vector<uint32_t> out;
+        CylinderIndex::Counts counts;
+        index.query(o, w, radius, begin, end, out, counts);
+        std::set<uint32_t> got(out.begin(), out.end());
+        ASSERT_EQ(got.size(), out.size()) << "query " << q << ": a point twice";
+        for (uint32_t i = 0; i < points.size(); ++i) {
+            const glm::dvec3 d = glm::dvec3(points[i]) - glm::dvec3(o), dw(w);
+            const double t = glm::dot(d, dw), across = glm::length(glm::cross(d, dw));
+            if (t > begin && t <= end && across < radius) {
+                EXPECT_TRUE(got.count(i)) << "query " << q << ": point " << i << " inside, not found";
+                ++found;
+            } else if (got.count(i)) {
+                const double out2 = std::max({across - radius, begin - t, t - end});
+                EXPECT_LT(out2, 0.011 * radius) << "query " << q << ": point " << i << " far outside";
+            }
+        }
+        EXPECT_LE(counts.points, points.size() + CylinderIndex::kFan);
+    }
+    EXPECT_GT(found, 20000);
+    const CylinderIndex none{std::vector<Vec3>()};
+    std::vector<uint32_t> out;
+    CylinderIndex::Counts counts;
+    none.query(Vec3(0.f), Vec3(1.f, 0.f, 0.f), 1.f, 0.f, 10.f, out, counts);
+    EXPECT_TRUE(out.empty());
+}

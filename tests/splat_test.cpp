@@ -8,6 +8,7 @@
 #include <set>
 
 #include "splat/eye.h"
+#include "splat/irradiance.h"
 #include "occlusion/kdtree.h"
 #include "scene/lights.h"
 #include "core/log.h"
@@ -332,6 +333,53 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     EXPECT_EQ(sa.contributions, sd.contributions);
     EXPECT_EQ(sa.visibleByPlanes, sd.visibleByPlanes);
     EXPECT_EQ(sa.visibilityRays, sd.visibilityRays);
+}
+
+// The sparse receivers found through their CylinderIndex take the light they take when the
+// occlusion tree over an empty grid finds them (as it did for them before the index): the same
+// receivers' sums to the bit, with the coverage measured for the same photons.
+TEST(SparseReceivers, TheIndexGivesTheTreesSums) {
+    const Scene s = furnishedRoom();
+    ThreadPool pool(2);
+    RayAccel accel(s, 2);
+    LightSampler lights(s);
+    PhotonSettings ps;
+    ps.photons = 6000;
+    ps.voxelSize = s.bounds.diagonal() / 64.f;
+    PhotonMap all = tracePhotons(s, accel, lights, ps, pool, silentReporter()), indirect;
+    for (const PhotonRay& r : all.rays)
+        if (r.cls == kPhotonIndirect) indirect.rays.push_back(r);
+    ASSERT_GT(indirect.rays.size(), 1000u);
+    Camera c;
+    c.position = {0.f, 1.f, 0.95f};
+    c.forward = {0.f, 0.f, -1.f};
+    c.up = {0.f, 1.f, 0.f};
+    c.right = glm::cross(c.forward, c.up);
+    c.yfov = 1.4f;
+    c.aspect = 1.f;
+    EyePassSettings es;
+    es.width = es.height = 64;
+    EyePass eye = traceEyePass(s, accel, nullptr, c, es, pool, silentReporter());
+    const IrradianceReceivers receivers = chooseReceivers(eye.samples, es.width, es.height, 0.08f, pool);
+    ASSERT_LT(receivers.samples.size(), eye.samples.size() / 2);
+    const OcclusionGrid empty(gridForBounds(s.bounds, 64));
+    EyeSamples ordered = receivers.samples;  // the tree reorders them; a sample's pixel is its slot
+    const OcclusionTree tree = buildOcclusionTree(empty, ordered, pool);
+    const CylinderIndex index(receivers.samples.position);
+    const CoverageSettings coverage;
+    SplatSettings byTree;
+    byTree.coverage = &coverage;
+    byTree.visibilityPlanes = false;
+    SplatSettings byIndex = byTree;
+    byIndex.index = &index;
+    FixedFilm a(int(receivers.slots()), 1), b(int(receivers.slots()), 1);
+    SplatStats sa, sb;
+    splatPhotons(accel, tree, ordered, indirect, byTree, a, pool, silentReporter(), &sa);
+    splatPhotons(accel, tree, receivers.samples, indirect, byIndex, b, pool, silentReporter(), &sb);
+    EXPECT_EQ(a.buffers[kIndirect], b.buffers[kIndirect]);
+    EXPECT_NE(a.buffers[kIndirect], std::vector<int64_t>(a.buffers[kIndirect].size(), 0));
+    EXPECT_EQ(sa.unseen, sb.unseen);
+    EXPECT_GT(sb.contributions, indirect.rays.size());
 }
 
 // Cornell box: the splat image against the path tracer at high spp. Relative MSE (per

@@ -40,15 +40,6 @@ const Vec3* unitTable() {
     return table.data();
 }
 
-// Bits of x spread to every third position (x < 2^10).
-inline uint32_t spreadBits(uint32_t x) {
-    x = (x | x << 16) & 0x030000ffu;
-    x = (x | x << 8) & 0x0300f00fu;
-    x = (x | x << 4) & 0x030c30c3u;
-    x = (x | x << 2) & 0x09249249u;
-    return x;
-}
-
 // The order in which photon rays are splatted: by the Morton code of the brick their hit lies
 // in, so that consecutive rays read the same part of the tree, the eye samples and the film
 // (most of a kernel's receivers lie around the hit). Ties keep the photon order. Any order
@@ -395,15 +386,29 @@ struct ReachedSamples {
                               visibility.insert(visibility.end(), v, v + count);
                           }};
     }
-    // Whether one of them lies in the kernel and its window and faces the photon
-    // (PhotonSplat::receiveOne's tests before the receiver rules).
-    bool anyFacing(const EyeSamples& samples, const PhotonRay& ray, bool windowed) const {
+    // The samples `index` finds in the ray's cylinder, each wholly visible (as the tree hands
+    // them where it holds no occluders).
+    void find(const CylinderIndex& index, const PhotonRay& ray, bool windowed, TraversalStats& stats) {
+        CylinderIndex::Counts counts;
+        index.query(ray.origin, ray.dir, ray.radius, ray.kernelBegin(windowed), ray.kernelEnd(windowed), this->index, counts);
+        visibility.assign(this->index.size(), 1.f);
+        ++stats.cylinders;
+        stats.nodes += counts.boxes;
+        stats.samplesTested += counts.points;
+        stats.samplesReached += this->index.size();
+    }
+    // Whether one of them lies in the kernel and its window, faces the photon and lies in front
+    // of the surface it leaves (PhotonSplat::receiveOne's tests before rule 2).
+    // (Rule 1 only with visibility, as the splat.)
+    bool anyFacing(const EyeSamples& samples, const PhotonRay& ray, bool windowed, bool visibility) const {
         const float begin = ray.kernelBegin(windowed), end = ray.kernelEnd(windowed), h2 = ray.radius * ray.radius;
         const Vec3* units = unitTable();
+        const Vec3 originNormal = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
         for (uint32_t i : index) {
             const Vec3 oy = samples.position[i] - ray.origin;
             const float t = glm::dot(oy, ray.dir);
             if (!(t > begin && t <= end) || !(glm::dot(oy, oy) - t * t < h2)) continue;
+            if (visibility && ray.originNormal && !(glm::dot(oy, originNormal) > 0.f)) continue;
             if (glm::dot(units[samples.normal[i]], ray.dir) < 0.f && glm::dot(units[samples.geomNormal[i]], ray.dir) < 0.f)
                 return true;
         }
@@ -463,27 +468,32 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
         for (int64_t p = first + b; p < first + e; ++p) {
             PhotonRay ray = photons.rays[order[size_t(p)]];
             int64_t* layer = layers.layer(acc[thread], ray.cls);
+            // A stored photon's coverage is measured already, its edges kept beside it.
+            const KernelEdge* stored = photons.edges.empty() ? nullptr : &photons.edges[order[size_t(p)]];
             const Cylinder cylinder = cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow);
-            if (settings.coverage) {
+            if (settings.coverage || settings.index) {
                 // The samples first, then the coverage where one of them may take light, then the
                 // light, with the kernel the coverage left (the same or halved: inside this cylinder).
                 ReachedSamples& r = reached[thread];
                 r.clear();
-                traverseCylinder(tree, samples, cylinder, scratch[thread], r.visitor(), &stats[thread].traversal);
-                if (!r.anyFacing(samples, ray, settings.receiverWindow)) {
-                    ++stats[thread].unseen;
-                    continue;
-                }
+                if (settings.index)
+                    r.find(*settings.index, ray, settings.receiverWindow, stats[thread].traversal);
+                else
+                    traverseCylinder(tree, samples, cylinder, scratch[thread], r.visitor(), &stats[thread].traversal);
                 KernelEdge edge;
-                normalizeCoverage(accel, ray, *settings.coverage, coverage[thread], &edge);
-                PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], &edge);
+                if (settings.coverage) {
+                    if (!r.anyFacing(samples, ray, settings.receiverWindow, settings.visibility)) {
+                        ++stats[thread].unseen;
+                        continue;
+                    }
+                    normalizeCoverage(accel, ray, *settings.coverage, coverage[thread], &edge);
+                }
+                PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], settings.coverage ? &edge : stored);
                 splat.receiveSeen(r.index.data(), r.visibility.data(), r.index.size());
                 splat.finish();
                 continue;
             }
-            // A stored photon's coverage is measured already, its edges kept beside it.
-            const KernelEdge* edge = photons.edges.empty() ? nullptr : &photons.edges[order[size_t(p)]];
-            PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], edge);
+            PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], stored);
             traverseCylinder(tree, samples, cylinder, scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },

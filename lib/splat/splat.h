@@ -14,6 +14,7 @@
 #include "core/simd.h"
 #include "output/film.h"
 #include "scene/accel.h"
+#include "occlusion/cylinder_index.h"
 #include "occlusion/kdtree_traverse.h"
 #include "splat/coverage.h"
 #include "splat/photons.h"
@@ -186,6 +187,10 @@ struct SplatSettings {
     // has reached an eye sample that may receive it, and not for the photons whose kernels land
     // where the camera sees nothing (half of them on the staircase interior).
     const CoverageSettings* coverage = nullptr;
+    // Non-null: the samples a cylinder reaches are found through this index over their positions
+    // (the sparse receivers: no occluders to walk), not through the tree, whose grid then only
+    // orders the photons. The same samples take the same light.
+    const CylinderIndex* index = nullptr;
     // The least share of a kernel a sample's light is divided by, with kernel edges (kernel_edge.h).
     float minCoverage = CoverageSettings{}.minCoverage;
     static constexpr int64_t kChunk = 256;

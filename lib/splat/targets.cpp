@@ -12,7 +12,7 @@ PassTargets::PassTargets(const RayAccel& accel, const OcclusionGrid& grid, EyeSa
     : accel_(accel), samples_(samples), pool_(pool), reporter_(reporter), ranks_(ranks) {
     if (spacing > 0.f) {  // chosen from the samples in pixel order, before the tree reorders them
         receivers_ = chooseReceivers(samples, width, height, spacing, pool);
-        receiverTree_ = buildOcclusionTree(grid, receivers_.samples, pool);
+        receiverIndex_ = CylinderIndex(receivers_.samples.position);
         sparse_ = true;
     }
     tree_ = buildOcclusionTree(grid, samples, pool, treeStats);
@@ -80,7 +80,8 @@ void PassTargets::splatPortion(const PhotonMap& photons, size_t begin, size_t en
     FixedFilm receivers;  // the slots as a film of one row, as splatPhotons writes
     receivers.width = int(receivers_.slots()), receivers.height = 1;
     receivers.buffers[kIndirect].swap(slots);
-    splatPhotons(accel_, receiverTree_, receivers_.samples, indirect, sparse, receivers, pool_, reporter_, stats, coverage);
+    sparse.index = &receiverIndex_;
+    splatPhotons(accel_, tree_, receivers_.samples, indirect, sparse, receivers, pool_, reporter_, stats, coverage);
     receivers.buffers[kIndirect].swap(slots);
 }
 

@@ -1,6 +1,7 @@
 // What a pass's photons land on (docs/design.md §8): every eye sample, through the occlusion tree
 // over them, for direct and caustic photons; with sparse receivers (irradiance.h) the indirect
-// photons on the receivers, through a tree of their own, gathered back to the eye samples.
+// photons on the receivers, found through an index of their own (cylinder_index.h), gathered back
+// to the eye samples.
 //
 // Takes:   the pass's eye samples in pixel order (the tree reorders them), the occlusion grid,
 //          the receivers' spacing (0: none).
@@ -66,7 +67,7 @@ private:
     OcclusionTree tree_;
     bool sparse_ = false;
     IrradianceReceivers receivers_;
-    OcclusionTree receiverTree_;
+    CylinderIndex receiverIndex_;
 };
 
 }  // namespace rs
