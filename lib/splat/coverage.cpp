@@ -49,8 +49,8 @@ struct ProbeRecord {
 // cylinder and not only the first along each line, it counts every non-specular surface it
 // crosses whose point, lifted to the side the probe comes from, sees x(i−1) (rule 2), and,
 // `windowed`, lies within the ray's receiver window (PhotonRay::kernelBegin and kernelEnd), as
-// the splat's samples must. The probes of a photon are parallel and their rule-2 rays share an
-// end: one packet each.
+// the splat's samples must. The probes of a photon are parallel: one packet a crossing; their
+// rule-2 rays share an end, and are asked in full packets after the last crossing.
 float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float turn, bool windowed, ProbeRecord* record = nullptr) {
     const Frame frame(ray.dir);
     const Vec3 n = ray.originNormal ? decodeUnit(ray.originNormal) : Vec3(0.f);
@@ -58,11 +58,16 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
     const float begin = ray.kernelBegin(windowed), end = ray.kernelEnd(windowed);
     const float offset = 2.f * rayOriginOffset(ray.origin);
     const Scene& scene = accel.scene();
-    Vec3 from[RayAccel::kPacket], lifted[RayAccel::kPacket];
+    Vec3 from[RayAccel::kPacket];
     float left[RayAccel::kPacket], t[RayAccel::kPacket], depth[RayAccel::kPacket];
     uint32_t tri[RayAccel::kPacket];
-    int probe[RayAccel::kPacket], liftedProbe[RayAccel::kPacket];  // the probe of each ray and of each lifted point
-    Vec3 liftedNormal[RayAccel::kPacket];
+    int probe[RayAccel::kPacket];  // the probe of each ray
+    // The points rule 2 asks about, of every crossing: whether one sees x(i−1) does not change
+    // where its probe goes on, so they are asked together, in full packets, once the probes end.
+    constexpr int kMaxLifted = RayAccel::kPacket * kMaxCrossings;
+    Vec3 lifted[kMaxLifted], liftedNormal[kMaxLifted];
+    int liftedProbe[kMaxLifted];
+    int receivers = 0;
     int live = 0;
     for (int k = 0; k < probes; ++k) {
         const float s = 1.f - std::cbrt(1.f - (float(k) + 0.5f) / float(probes));
@@ -79,10 +84,9 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
         depth[live] = start;
         left[live++] = end - start;
     }
-    int covered = 0;
     for (int crossing = 0; crossing < kMaxCrossings && live > 0; ++crossing) {
         const uint32_t hits = accel.intersectParallel(from, live, ray.dir, left, t, tri);
-        int next = 0, receivers = 0;
+        int next = 0;
         for (int i = 0; i < live; ++i) {
             if (!(hits >> i & 1u)) continue;
             const Vec3 p = from[i] + t[i] * ray.dir;
@@ -96,14 +100,16 @@ float coverageOf(const RayAccel& accel, const PhotonRay& ray, int probes, float 
             }
             if (left[i] - t[i] > 0.f) from[next] = p - eps * toward, probe[next] = probe[i], depth[next] = at, left[next++] = left[i] - t[i];
         }
-        if (receivers > 0) {
-            const uint32_t hidden = accel.occludedToPoint(lifted, receivers, ray.origin);
-            covered += receivers - __builtin_popcount(hidden);
-            if (record)
-                for (int i = 0; i < receivers; ++i)
-                    if (!(hidden >> i & 1u)) record->arrive(liftedProbe[i], lifted[i], liftedNormal[i]);
-        }
         live = next;
+    }
+    int covered = 0;
+    for (int first = 0; first < receivers; first += RayAccel::kPacket) {
+        const int n = std::min(RayAccel::kPacket, receivers - first);
+        const uint32_t hidden = accel.occludedToPoint(lifted + first, n, ray.origin);
+        covered += n - __builtin_popcount(hidden);
+        if (record)
+            for (int i = 0; i < n; ++i)
+                if (!(hidden >> i & 1u)) record->arrive(liftedProbe[first + i], lifted[first + i], liftedNormal[first + i]);
     }
     return float(covered) / float(probes);
 }
