@@ -910,8 +910,9 @@ TEST(OcclusionTreeTraversal, ThinDoubleSidedSlabDoesNotShadowItsLitSide) {
 
 // The receivers' index returns every point inside a cylinder (depth in (begin, end], distance
 // from the axis below the radius, in double precision), each once, and nothing past a hundredth
-// of the radius outside it: points on planes, a thin rod and scattered, cylinders of every
-// direction (some along the axes, where the slabs divide by zero) and length.
+// of the radius outside it: points on planes, a thin rod and scattered (and two not finite, never
+// found), cylinders of every direction (some along the axes, where the slabs divide by zero) and
+// length.
 TEST(CylinderIndex, FindsEveryPointInsideAndLittleMore) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(0.f, 1.f);
@@ -920,6 +921,8 @@ TEST(CylinderIndex, FindsEveryPointInsideAndLittleMore) {
     for (int i = 0; i < 2000; ++i) points.emplace_back(4.f, 2.5f * u(rng), 3.f * u(rng));           // a wall
     for (int i = 0; i < 500; ++i) points.emplace_back(2.f + 0.01f * u(rng), 2.f * u(rng), 1.5f);    // a rod
     for (int i = 0; i < 1003; ++i) points.emplace_back(4.f * u(rng), 2.5f * u(rng), 3.f * u(rng));  // anywhere
+    points.insert(points.begin() + 1234, Vec3(NAN, 1.f, 1.f));  // never found, whatever the cylinder
+    points.emplace_back(2.f, INFINITY, 1.f);
     const CylinderIndex index(points);
     int found = 0;
     for (int q = 0; q < 2000; ++q) {

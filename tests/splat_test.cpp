@@ -227,6 +227,29 @@ static Scene furnishedRoom() {
     return s;
 }
 
+// The furnished room's eye samples, size × size pixels, seen from by its door.
+static EyePass furnishedRoomEye(const Scene& s, const RayAccel& accel, int size, ThreadPool& pool) {
+    Camera c;
+    c.position = {0.f, 1.f, 0.95f};
+    c.forward = {0.f, 0.f, -1.f};
+    c.up = {0.f, 1.f, 0.f};
+    c.right = glm::cross(c.forward, c.up);
+    c.yfov = 1.4f;
+    c.aspect = 1.f;
+    EyePassSettings es;
+    es.width = es.height = size;
+    return traceEyePass(s, accel, nullptr, c, es, pool, silentReporter());
+}
+
+// `count` photons in the furnished room, their kernels from a grid of 64 along its diagonal.
+static PhotonMap furnishedRoomPhotons(const Scene& s, const RayAccel& accel, int count, ThreadPool& pool) {
+    LightSampler lights(s);
+    PhotonSettings ps;
+    ps.photons = count;
+    ps.voxelSize = s.bounds.diagonal() / 64.f;
+    return tracePhotons(s, accel, lights, ps, pool, silentReporter());
+}
+
 // The BVH's cylinder query finds exactly the triangles whose boxes the cylinder's disc boxes
 // touch (brute force over every triangle with the same test), and stops when told to.
 TEST(VisibilityPlanes, TriangleBvhFindsWhatBruteForceFinds) {
@@ -274,11 +297,7 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     const Scene s = furnishedRoom();
     ThreadPool pool(2);
     RayAccel accel(s, 2);
-    LightSampler lights(s);
-    PhotonSettings ps;
-    ps.photons = 4000;
-    ps.voxelSize = s.bounds.diagonal() / 64.f;
-    PhotonMap photons = tracePhotons(s, accel, lights, ps, pool, silentReporter());
+    const PhotonMap photons = furnishedRoomPhotons(s, accel, 4000, pool);
     std::mt19937 rng(9);
     std::uniform_real_distribution<float> u(0.f, 1.f);
     int64_t decided = 0, asked = 0;
@@ -298,20 +317,12 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     EXPECT_GT(decided, asked / 10);
 
     OcclusionGrid grid = voxelizeCpu(s, gridForBounds(s.bounds, 64), pool, silentReporter());
-    Camera c;
-    c.position = {0.f, 1.f, 0.95f};
-    c.forward = {0.f, 0.f, -1.f};
-    c.up = {0.f, 1.f, 0.f};
-    c.right = glm::cross(c.forward, c.up);
-    c.yfov = 1.4f;
-    c.aspect = 1.f;
-    EyePassSettings es;
-    es.width = es.height = 48;
-    EyePass eye = traceEyePass(s, accel, nullptr, c, es, pool, silentReporter());
+    const int size = 48;
+    EyePass eye = furnishedRoomEye(s, accel, size, pool);
     OcclusionTree tree = buildOcclusionTree(grid, eye.samples, pool);
     SplatSettings withPlanes, withRays;
     withRays.visibilityPlanes = false;
-    FixedFilm a(es.width, es.height), b(es.width, es.height);
+    FixedFilm a(size, size), b(size, size);
     SplatStats sa, sb;
     splatPhotons(accel, tree, eye.samples, photons, withPlanes, a, pool, silentReporter(), &sa);
     splatPhotons(accel, tree, eye.samples, photons, withRays, b, pool, silentReporter(), &sb);
@@ -326,7 +337,7 @@ TEST(VisibilityPlanes, AgreeWithEmbreeAndLeaveTheImageAsItWas) {
     // Four samples at a time give what one at a time gives, to the bit.
     SplatSettings oneByOne;
     oneByOne.batches = false;
-    FixedFilm d(es.width, es.height);
+    FixedFilm d(size, size);
     SplatStats sd;
     splatPhotons(accel, tree, eye.samples, photons, oneByOne, d, pool, silentReporter(), &sd);
     for (int l = 0; l < FixedFilm::kBuffers; ++l) EXPECT_EQ(a.buffers[l], d.buffers[l]) << "buffer " << l;
@@ -342,25 +353,13 @@ TEST(SparseReceivers, TheIndexGivesTheTreesSums) {
     const Scene s = furnishedRoom();
     ThreadPool pool(2);
     RayAccel accel(s, 2);
-    LightSampler lights(s);
-    PhotonSettings ps;
-    ps.photons = 6000;
-    ps.voxelSize = s.bounds.diagonal() / 64.f;
-    PhotonMap all = tracePhotons(s, accel, lights, ps, pool, silentReporter()), indirect;
+    const PhotonMap all = furnishedRoomPhotons(s, accel, 6000, pool);
+    PhotonMap indirect;
     for (const PhotonRay& r : all.rays)
         if (r.cls == kPhotonIndirect) indirect.rays.push_back(r);
     ASSERT_GT(indirect.rays.size(), 1000u);
-    Camera c;
-    c.position = {0.f, 1.f, 0.95f};
-    c.forward = {0.f, 0.f, -1.f};
-    c.up = {0.f, 1.f, 0.f};
-    c.right = glm::cross(c.forward, c.up);
-    c.yfov = 1.4f;
-    c.aspect = 1.f;
-    EyePassSettings es;
-    es.width = es.height = 64;
-    EyePass eye = traceEyePass(s, accel, nullptr, c, es, pool, silentReporter());
-    const IrradianceReceivers receivers = chooseReceivers(eye.samples, es.width, es.height, 0.08f, pool);
+    const EyePass eye = furnishedRoomEye(s, accel, 64, pool);
+    const IrradianceReceivers receivers = chooseReceivers(eye.samples, 64, 64, 0.08f, pool);
     ASSERT_LT(receivers.samples.size(), eye.samples.size() / 2);
     const OcclusionGrid empty(gridForBounds(s.bounds, 64));
     EyeSamples ordered = receivers.samples;  // the tree reorders them; a sample's pixel is its slot

@@ -19,15 +19,19 @@ struct CylinderIndexQuery {
     float radius;      // widened by the slack
 };
 
-CylinderIndex::CylinderIndex(const std::vector<Vec3>& points) : count_(points.size()) {
+CylinderIndex::CylinderIndex(const std::vector<Vec3>& points) {
     if (points.empty()) return;
     Vec3 lo(INFINITY), hi(-INFINITY);
-    for (const Vec3& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    for (const Vec3& p : points)
+        if (isFinite(p)) lo = glm::min(lo, p), hi = glm::max(hi, p);
     const Vec3 scale = 1023.f / glm::max(hi - lo, Vec3(1e-20f));
-    std::vector<uint64_t> keyed(points.size());  // (Morton code, index): ties by index
+    std::vector<uint64_t> keyed(points.size());  // (Morton code, index): ties by index; not finite: last
     for (size_t i = 0; i < points.size(); ++i) {
-        const Vec3 q = glm::clamp((points[i] - lo) * scale, Vec3(0.f), Vec3(1023.f));
-        const uint32_t code = spreadBits(uint32_t(q.x)) | spreadBits(uint32_t(q.y)) << 1 | spreadBits(uint32_t(q.z)) << 2;
+        uint32_t code = UINT32_MAX;
+        if (isFinite(points[i])) {
+            const Vec3 q = glm::clamp((points[i] - lo) * scale, Vec3(0.f), Vec3(1023.f));
+            code = spreadBits(uint32_t(q.x)) | spreadBits(uint32_t(q.y)) << 1 | spreadBits(uint32_t(q.z)) << 2;
+        }
         keyed[i] = uint64_t(code) << 32 | i;
     }
     std::sort(keyed.begin(), keyed.end());
@@ -35,14 +39,18 @@ CylinderIndex::CylinderIndex(const std::vector<Vec3>& points) : count_(points.si
     // The leaves: the points in that order, the last leaf padded with points no cylinder reaches.
     const size_t leaves = (points.size() + kFan - 1) / kFan, padded = leaves * kFan;
     x_.assign(padded, kFar), y_.assign(padded, kFar), z_.assign(padded, kFar), id_.assign(padded, 0);
+    size_t finite = 0;
     for (size_t k = 0; k < points.size(); ++k) {
         const uint32_t i = uint32_t(keyed[k]);
+        if (!isFinite(points[i])) break;
         x_[k] = points[i].x, y_[k] = points[i].y, z_[k] = points[i].z, id_[k] = i;
+        finite = k + 1;
     }
 
     // Boxes: the leaves', then sixteen of a level to one of the next, up to a level of ≤ kFan.
-    std::vector<Vec3> boxLo(leaves, Vec3(INFINITY)), boxHi(leaves, Vec3(-INFINITY));
-    for (size_t k = 0; k < points.size(); ++k) {
+    std::vector<Vec3> boxLo(leaves, Vec3(kFar)), boxHi(leaves, Vec3(kFar));
+    for (size_t k = 0; k < finite; ++k) {
+        if (k % kFan == 0) boxLo[k / kFan] = Vec3(INFINITY), boxHi[k / kFan] = Vec3(-INFINITY);
         const Vec3 p(x_[k], y_[k], z_[k]);
         boxLo[k / kFan] = glm::min(boxLo[k / kFan], p), boxHi[k / kFan] = glm::max(boxHi[k / kFan], p);
     }
@@ -65,12 +73,6 @@ CylinderIndex::CylinderIndex(const std::vector<Vec3>& points) : count_(points.si
             lo2[b / kFan] = glm::min(lo2[b / kFan], boxLo[b]), hi2[b / kFan] = glm::max(hi2[b / kFan], boxHi[b]);
         boxLo.swap(lo2), boxHi.swap(hi2);
     }
-}
-
-size_t CylinderIndex::bytes() const {
-    size_t b = x_.size() * 3 * sizeof(float) + id_.size() * sizeof(uint32_t);
-    for (const Boxes& l : levels_) b += l.size() * 7 * sizeof(float);
-    return b;
 }
 
 void CylinderIndex::query(const Vec3& origin, const Vec3& dir, float radius, float begin, float end,

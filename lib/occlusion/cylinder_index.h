@@ -8,12 +8,14 @@
 // Space:   world.
 //
 // The occlusion tree (kdtree.h) walks a cylinder slice by slice for the paper's mask. With
-// visibility by rays and no occluders in the tree, the receivers need only a range search, and
-// the tree's walk cost a photon three times its coverage probes' rays. Here the points are taken
-// in Morton order, sixteen to a leaf box; sixteen boxes make a box of the level above, up to
-// one level of at most sixteen. A box is opened when its bounding sphere may meet the cylinder
-// and its extent along ω may meet (begin, end]; a leaf's points are tested one by one, with a
-// slack of a hundredth of the radius so that rounding never drops a point the caller keeps.
+// visibility by rays and no occluders in the tree, the receivers need only a range search, which
+// the walk made cost a photon about as much as its coverage probes. Here the points are taken in
+// Morton order, sixteen to a leaf box; sixteen boxes make a box of the level above, up to one
+// level of at most sixteen. A box is opened where the axis, within (begin, end], meets the box
+// widened by the radius on every side (by slabs) and the box's bounding sphere lies within the
+// radius of the axis; a leaf's points are tested four at a time, with a slack of a hundredth of
+// the radius so that rounding never drops a point the caller keeps. Points that are not finite
+// are never found.
 #pragma once
 
 #include <cstdint>
@@ -42,9 +44,6 @@ public:
     void query(const Vec3& origin, const Vec3& dir, float radius, float begin, float end, std::vector<uint32_t>& out,
                Counts& counts) const;
 
-    size_t size() const { return count_; }
-    size_t bytes() const;
-
 private:
     // A level's boxes: centre, half extent, bounding sphere's radius; padded to a whole kFan
     // with boxes no cylinder reaches.
@@ -56,7 +55,6 @@ private:
     uint32_t pointsInside(size_t first, const CylinderIndexQuery& q) const;
     void visit(const CylinderIndexQuery& q, int level, size_t first, std::vector<uint32_t>& out, Counts& counts) const;
 
-    size_t count_ = 0;
     std::vector<float> x_, y_, z_;  // the points in leaf order, padded to whole leaves far away
     std::vector<uint32_t> id_;      // their indices
     std::vector<Boxes> levels_;     // levels_[0]: the leaves' boxes; the last: one kFan
