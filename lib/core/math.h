@@ -36,8 +36,6 @@ inline int floorToInt(float x) {
     return i - (x < float(i));
 }
 inline int ceilToInt(float x) { return -floorToInt(-x); }
-// The number of set bits, in a few instructions where the popcnt instruction is not assumed
-// (the builtin is then a library call).
 // Bits of x spread to every third position (x < 2^10): one axis of a 30-bit Morton code.
 inline uint32_t spreadBits(uint32_t x) {
     x = (x | x << 16) & 0x030000ffu;
@@ -46,6 +44,8 @@ inline uint32_t spreadBits(uint32_t x) {
     x = (x | x << 2) & 0x09249249u;
     return x;
 }
+// The number of set bits, in a few instructions where the popcnt instruction is not assumed
+// (the builtin is then a library call).
 inline int bitCount(uint64_t v) {
     v -= (v >> 1) & 0x5555555555555555ull;
     v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);

@@ -12,11 +12,30 @@ namespace rs {
 constexpr float kFar = 1e30f;  // the padding's coordinates: no cylinder reaches them
 
 // What a query tests against, relative to the axis' origin: a point at u = p − origin lies
-// at depth t = u·ω and distance |u × ω| from the axis.
+// at depth t = u·ω and distance |u × ω| from the axis. Made once a query, its numbers each in
+// four lanes where SSE is there.
 struct CylinderIndexQuery {
     Vec3 origin, dir, inv;  // inv: 1/ω, a component of ω below 1e-20 taken as 1e-20
     float begin, end;  // depths, widened by the slack
     float radius;      // widened by the slack
+#if defined(__SSE2__)
+    __m128 ox, oy, oz, dx, dy, dz, ix, iy, iz, begin4, end4, radius4, r2;
+    CylinderIndexQuery(const Vec3& o, const Vec3& d, const Vec3& i, float b, float e, float r)
+        : origin(o), dir(d), inv(i), begin(b), end(e), radius(r), ox(_mm_set1_ps(o.x)), oy(_mm_set1_ps(o.y)),
+          oz(_mm_set1_ps(o.z)), dx(_mm_set1_ps(d.x)), dy(_mm_set1_ps(d.y)), dz(_mm_set1_ps(d.z)), ix(_mm_set1_ps(i.x)),
+          iy(_mm_set1_ps(i.y)), iz(_mm_set1_ps(i.z)), begin4(_mm_set1_ps(b)), end4(_mm_set1_ps(e)), radius4(_mm_set1_ps(r)),
+          r2(_mm_set1_ps(r * r)) {}
+    // |u × ω|²: the squared distance from the axis.
+    __m128 across2(__m128 ux, __m128 uy, __m128 uz) const {
+        const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, dz), _mm_mul_ps(uz, dy));
+        const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, dx), _mm_mul_ps(ux, dz));
+        const __m128 cz = _mm_sub_ps(_mm_mul_ps(ux, dy), _mm_mul_ps(uy, dx));
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, cx), _mm_mul_ps(cy, cy)), _mm_mul_ps(cz, cz));
+    }
+#else
+    CylinderIndexQuery(const Vec3& o, const Vec3& d, const Vec3& i, float b, float e, float r)
+        : origin(o), dir(d), inv(i), begin(b), end(e), radius(r) {}
+#endif
 };
 
 CylinderIndex::CylinderIndex(const std::vector<Vec3>& points) {
@@ -81,32 +100,9 @@ void CylinderIndex::query(const Vec3& origin, const Vec3& dir, float radius, flo
     const float slack = 0.01f * radius;
     Vec3 inv;
     for (int a = 0; a < 3; ++a) inv[a] = 1.f / (std::abs(dir[a]) > 1e-20f ? dir[a] : std::copysign(1e-20f, dir[a]));
-    const CylinderIndexQuery q{origin, dir, inv, begin - slack, end + slack, radius + slack};
+    const CylinderIndexQuery q(origin, dir, inv, begin - slack, end + slack, radius + slack);
     visit(q, int(levels_.size()) - 1, 0, out, counts);
 }
-
-namespace {
-
-#if defined(__SSE2__)
-struct Lanes {  // a query's numbers, each in four lanes
-    __m128 ox, oy, oz, dx, dy, dz, ix, iy, iz, begin, end, radius, r2;
-    explicit Lanes(const CylinderIndexQuery& q)
-        : ox(_mm_set1_ps(q.origin.x)), oy(_mm_set1_ps(q.origin.y)), oz(_mm_set1_ps(q.origin.z)),
-          dx(_mm_set1_ps(q.dir.x)), dy(_mm_set1_ps(q.dir.y)), dz(_mm_set1_ps(q.dir.z)),
-          ix(_mm_set1_ps(q.inv.x)), iy(_mm_set1_ps(q.inv.y)), iz(_mm_set1_ps(q.inv.z)),
-          begin(_mm_set1_ps(q.begin)), end(_mm_set1_ps(q.end)), radius(_mm_set1_ps(q.radius)),
-          r2(_mm_set1_ps(q.radius * q.radius)) {}
-    // |u × ω|²: the squared distance from the axis.
-    __m128 across2(__m128 ux, __m128 uy, __m128 uz) const {
-        const __m128 cx = _mm_sub_ps(_mm_mul_ps(uy, dz), _mm_mul_ps(uz, dy));
-        const __m128 cy = _mm_sub_ps(_mm_mul_ps(uz, dx), _mm_mul_ps(ux, dz));
-        const __m128 cz = _mm_sub_ps(_mm_mul_ps(ux, dy), _mm_mul_ps(uy, dx));
-        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(cx, cx), _mm_mul_ps(cy, cy)), _mm_mul_ps(cz, cz));
-    }
-};
-#endif
-
-}  // namespace
 
 // Bit k: box first + k of `boxes` may meet the cylinder. The axis' depths inside the box widened
 // by the radius on every side (which holds every point of the cylinder near the box), by slabs,
@@ -114,20 +110,19 @@ struct Lanes {  // a query's numbers, each in four lanes
 uint32_t CylinderIndex::openBoxes(const Boxes& boxes, size_t first, const CylinderIndexQuery& q) {
     uint32_t open = 0;
 #if defined(__SSE2__)
-    const Lanes l(q);
     for (int g = 0; g < kFan; g += 4) {
         const size_t b = first + size_t(g);
-        const __m128 ux = _mm_sub_ps(_mm_loadu_ps(&boxes.cx[b]), l.ox), uy = _mm_sub_ps(_mm_loadu_ps(&boxes.cy[b]), l.oy),
-                     uz = _mm_sub_ps(_mm_loadu_ps(&boxes.cz[b]), l.oz);
-        const __m128 wx = _mm_add_ps(_mm_loadu_ps(&boxes.ex[b]), l.radius), wy = _mm_add_ps(_mm_loadu_ps(&boxes.ey[b]), l.radius),
-                     wz = _mm_add_ps(_mm_loadu_ps(&boxes.ez[b]), l.radius);
-        const __m128 x0 = _mm_mul_ps(_mm_sub_ps(ux, wx), l.ix), x1 = _mm_mul_ps(_mm_add_ps(ux, wx), l.ix);
-        const __m128 y0 = _mm_mul_ps(_mm_sub_ps(uy, wy), l.iy), y1 = _mm_mul_ps(_mm_add_ps(uy, wy), l.iy);
-        const __m128 z0 = _mm_mul_ps(_mm_sub_ps(uz, wz), l.iz), z1 = _mm_mul_ps(_mm_add_ps(uz, wz), l.iz);
-        const __m128 near = _mm_max_ps(_mm_max_ps(_mm_min_ps(x0, x1), _mm_min_ps(y0, y1)), _mm_max_ps(_mm_min_ps(z0, z1), l.begin));
-        const __m128 far = _mm_min_ps(_mm_min_ps(_mm_max_ps(x0, x1), _mm_max_ps(y0, y1)), _mm_min_ps(_mm_max_ps(z0, z1), l.end));
-        const __m128 reach = _mm_add_ps(l.radius, _mm_loadu_ps(&boxes.r[b]));
-        const __m128 in = _mm_and_ps(_mm_cmple_ps(near, far), _mm_cmple_ps(l.across2(ux, uy, uz), _mm_mul_ps(reach, reach)));
+        const __m128 ux = _mm_sub_ps(_mm_loadu_ps(&boxes.cx[b]), q.ox), uy = _mm_sub_ps(_mm_loadu_ps(&boxes.cy[b]), q.oy),
+                     uz = _mm_sub_ps(_mm_loadu_ps(&boxes.cz[b]), q.oz);
+        const __m128 wx = _mm_add_ps(_mm_loadu_ps(&boxes.ex[b]), q.radius4), wy = _mm_add_ps(_mm_loadu_ps(&boxes.ey[b]), q.radius4),
+                     wz = _mm_add_ps(_mm_loadu_ps(&boxes.ez[b]), q.radius4);
+        const __m128 x0 = _mm_mul_ps(_mm_sub_ps(ux, wx), q.ix), x1 = _mm_mul_ps(_mm_add_ps(ux, wx), q.ix);
+        const __m128 y0 = _mm_mul_ps(_mm_sub_ps(uy, wy), q.iy), y1 = _mm_mul_ps(_mm_add_ps(uy, wy), q.iy);
+        const __m128 z0 = _mm_mul_ps(_mm_sub_ps(uz, wz), q.iz), z1 = _mm_mul_ps(_mm_add_ps(uz, wz), q.iz);
+        const __m128 near = _mm_max_ps(_mm_max_ps(_mm_min_ps(x0, x1), _mm_min_ps(y0, y1)), _mm_max_ps(_mm_min_ps(z0, z1), q.begin4));
+        const __m128 far = _mm_min_ps(_mm_min_ps(_mm_max_ps(x0, x1), _mm_max_ps(y0, y1)), _mm_min_ps(_mm_max_ps(z0, z1), q.end4));
+        const __m128 reach = _mm_add_ps(q.radius4, _mm_loadu_ps(&boxes.r[b]));
+        const __m128 in = _mm_and_ps(_mm_cmple_ps(near, far), _mm_cmple_ps(q.across2(ux, uy, uz), _mm_mul_ps(reach, reach)));
         open |= uint32_t(_mm_movemask_ps(in)) << g;
     }
 #else
@@ -151,14 +146,13 @@ uint32_t CylinderIndex::openBoxes(const Boxes& boxes, size_t first, const Cylind
 uint32_t CylinderIndex::pointsInside(size_t first, const CylinderIndexQuery& q) const {
     uint32_t in = 0;
 #if defined(__SSE2__)
-    const Lanes l(q);
     for (int g = 0; g < kFan; g += 4) {
         const size_t p = first + size_t(g);
-        const __m128 ux = _mm_sub_ps(_mm_loadu_ps(&x_[p]), l.ox), uy = _mm_sub_ps(_mm_loadu_ps(&y_[p]), l.oy),
-                     uz = _mm_sub_ps(_mm_loadu_ps(&z_[p]), l.oz);
-        const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ux, l.dx), _mm_mul_ps(uy, l.dy)), _mm_mul_ps(uz, l.dz));
-        const __m128 m = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(t, l.begin), _mm_cmple_ps(t, l.end)),
-                                    _mm_cmple_ps(l.across2(ux, uy, uz), l.r2));
+        const __m128 ux = _mm_sub_ps(_mm_loadu_ps(&x_[p]), q.ox), uy = _mm_sub_ps(_mm_loadu_ps(&y_[p]), q.oy),
+                     uz = _mm_sub_ps(_mm_loadu_ps(&z_[p]), q.oz);
+        const __m128 t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ux, q.dx), _mm_mul_ps(uy, q.dy)), _mm_mul_ps(uz, q.dz));
+        const __m128 m = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(t, q.begin4), _mm_cmple_ps(t, q.end4)),
+                                    _mm_cmple_ps(q.across2(ux, uy, uz), q.r2));
         in |= uint32_t(_mm_movemask_ps(m)) << g;
     }
 #else
