@@ -470,7 +470,8 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
             int64_t* layer = layers.layer(acc[thread], ray.cls);
             // A stored photon's coverage is measured already, its edges kept beside it.
             const KernelEdge* stored = photons.edges.empty() ? nullptr : &photons.edges[order[size_t(p)]];
-            const Cylinder cylinder = cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow);
+            // The tree's walk needs the cylinder in voxels; the index takes the ray as it is.
+            const auto cylinder = [&] { return cylinderOf(ray, tree.geometry, settings.visibility, settings.receiverWindow); };
             if (settings.coverage || settings.index) {
                 // The samples first, then the coverage where one of them may take light, then the
                 // light, with the kernel the coverage left (the same or halved: inside this cylinder).
@@ -479,7 +480,7 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                 if (settings.index)
                     r.find(*settings.index, ray, settings.receiverWindow, stats[thread].traversal);
                 else
-                    traverseCylinder(tree, samples, cylinder, scratch[thread], r.visitor(), &stats[thread].traversal);
+                    traverseCylinder(tree, samples, cylinder(), scratch[thread], r.visitor(), &stats[thread].traversal);
                 KernelEdge edge;
                 if (settings.coverage) {
                     if (!r.anyFacing(samples, ray, settings.receiverWindow, settings.visibility)) {
@@ -494,7 +495,7 @@ void splatPhotons(const RayAccel& accel, const OcclusionTree& tree, const EyeSam
                 continue;
             }
             PhotonSplat splat(accel, samples, ray, settings, layer, stats[thread], stored);
-            traverseCylinder(tree, samples, cylinder, scratch[thread],
+            traverseCylinder(tree, samples, cylinder(), scratch[thread],
                              Overloaded{[&](uint32_t i, float visibility) { splat.receive(i, visibility); },
                                         [&](const uint32_t* index, size_t count) { splat.receiveUnshadowed(index, count); },
                                         [&](const uint32_t* index, const float* visibility, size_t count) {
